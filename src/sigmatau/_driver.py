@@ -1,0 +1,125 @@
+"""Running one statistic's kernel over a τ grid and packaging the result.
+
+Every public statistic function is a thin wrapper: it describes its estimator
+with a :class:`Statistic` and calls :func:`run`, which validates the inputs,
+converts frequency data to phase, chooses the averaging factors and builds the
+:class:`~sigmatau.result.StabilityResult`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from ._input import as_series, check_data_type, check_rate, remove_linear_phase, to_phase
+from .errors import DataError
+from .result import StabilityResult
+from .taus import select_m
+
+__all__ = ["Statistic", "run", "prepare"]
+
+#: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
+#: averaging factor in ``ms``, from the phase series ``x``.
+Kernel = Callable[[np.ndarray, np.ndarray, float], "tuple[np.ndarray, np.ndarray]"]
+
+
+@dataclass(frozen=True)
+class Statistic:
+    """Description of one estimator.
+
+    Attributes
+    ----------
+    name : str
+        Public name, e.g. ``"oadev"``.
+    compute : Kernel
+        Vectorised over the averaging factors; receives the phase series.
+    max_m : callable
+        Mathematical largest factor for N phase points.
+    stop_ratio : float
+        Keyword grids stop at ``⌊N/stop_ratio⌋`` (Stable32 convention).
+    min_points : int
+        Fewest phase points the estimator needs at its smallest factor.
+    min_m : int
+        Smallest factor (2 for the Theo family).
+    even : bool
+        Only even factors are valid (Theo family).
+    tau_factor : float
+        τ = tau_factor·m·τ0 (0.75 for the Theo family).
+    trend_invariant : bool
+        The estimator ignores a linear phase trend (a constant frequency offset),
+        so the driver removes it before ``compute`` to protect precision.
+    """
+
+    name: str
+    compute: Kernel
+    max_m: Callable[[int], int]
+    stop_ratio: float
+    min_points: int
+    min_m: int = 1
+    even: bool = False
+    tau_factor: float = 1.0
+    trend_invariant: bool = True
+
+
+def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str]:
+    """Validate the data and return ``(phase, rate, data_type)``."""
+    rate_f = check_rate(rate)
+    dtype = check_data_type(data_type)
+    series = as_series(data)
+    if stat.trend_invariant:
+        x = to_phase(series - series.mean(), rate_f, dtype) if dtype == "freq" else remove_linear_phase(series)
+    else:
+        x = to_phase(series, rate_f, dtype)
+    if x.size < stat.min_points:
+        have = f"{series.size} {'phase' if dtype == 'phase' else 'frequency'} samples"
+        need = stat.min_points if dtype == "phase" else stat.min_points - 1
+        raise DataError(f"{stat.name} needs at least {need} {dtype} samples, got {have}")
+    return x, rate_f, dtype
+
+
+def run(
+    stat: Statistic,
+    data: object,
+    *,
+    rate: object,
+    data_type: object,
+    taus: object,
+    m: object,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Compute ``stat`` on ``data`` and return its result (raw, without bias correction)."""
+    x, rate_f, dtype = prepare(stat, data, rate, data_type)
+    ms = select_m(
+        stat.name,
+        n_points=x.size,
+        rate=rate_f,
+        taus=taus,
+        m=m,
+        points_per_decade=points_per_decade,
+        m_min=stat.min_m,
+        m_max=stat.max_m(x.size),
+        stop_ratio=stat.stop_ratio,
+        even=stat.even,
+        tau_factor=stat.tau_factor,
+    )
+    tau0 = 1.0 / rate_f
+    if ms.size:
+        var, n = stat.compute(x, ms, tau0)
+    else:
+        var, n = np.empty(0), np.empty(0, dtype=np.int64)
+    var = np.asarray(var, dtype=float)
+    # Round-off can leave a tiny negative variance for constant data.
+    var = np.where(var < 0.0, 0.0, var)
+    return StabilityResult(
+        statistic=stat.name,
+        taus=stat.tau_factor * ms * tau0,
+        m=ms,
+        var=var,
+        dev=np.sqrt(var),
+        n=np.asarray(n, dtype=np.int64),
+        rate=rate_f,
+        data_type=dtype,
+        n_points=int(x.size),
+    )

@@ -1,0 +1,298 @@
+"""Allan family: standard deviation of averages, ADEV, OADEV, MDEV and TDEV.
+
+Every estimator here costs O(N) per averaging factor (O(N/m) for the
+non-overlapped ones). The plain filter-chain definitions of the design tip are
+in :mod:`sigmatau.filterchain` and the tests hold these fast paths to them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._driver import Statistic, run
+from ._input import DataType
+from .result import StabilityResult
+
+__all__ = ["stdev", "ostdev", "adev", "oadev", "mdev", "tdev"]
+
+_DOC_COMMON = """
+    Parameters
+    ----------
+    data : array_like
+        1-D samples. With ``data_type="freq"`` (the default) they are the sensor
+        output or fractional frequency, as an IMU user has them; with
+        ``data_type="phase"`` they are time-error (integrated) samples. Other
+        libraries default to phase: passing rate data to them with defaults gives
+        results scaled by about √3 and a wrong slope.
+    rate : float
+        Sample rate in Hz; τ0 = 1/rate.
+    data_type : {"freq", "phase"}
+        Meaning of ``data`` (see above).
+    taus : {"octave", "decade", "all", "log"} or array_like
+        τ grid as a keyword, or τ values in seconds (rounded to multiples of τ0).
+        Keyword grids stop at the statistic's default limit (see
+        :mod:`sigmatau.taus`).
+    m : int or array_like, optional
+        Explicit averaging factors instead of ``taus``.
+    points_per_decade : int
+        Density of the ``"log"`` grid.
+
+    Returns
+    -------
+    StabilityResult
+"""
+
+
+def _doc(func):
+    func.__doc__ = func.__doc__.replace("    {common}\n", _DOC_COMMON)
+    return func
+
+
+# --- kernels: (phase x, factors, τ0) -> (variance, number of terms) ---------------
+
+
+def _stdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        k = (x.size - 1) // m
+        means = np.diff(x[: k * m + 1 : m]) / (m * tau0)
+        var[i] = means.var(ddof=1)
+        n[i] = k
+    return var, n
+
+
+def _ostdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        means = (x[m:] - x[:-m]) / (m * tau0)
+        var[i] = means.var(ddof=1)
+        n[i] = means.size
+    return var, n
+
+
+def _avar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        xs = x[: ((x.size - 1) // m) * m + 1 : m]
+        d2 = xs[2:] - 2.0 * xs[1:-1] + xs[:-2]
+        var[i] = np.dot(d2, d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        n[i] = d2.size
+    return var, n
+
+
+def _oavar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        d2 = x[2 * m :] - 2.0 * x[m:-m] + x[: -2 * m]
+        var[i] = np.dot(d2, d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        n[i] = d2.size
+    return var, n
+
+
+def _mvar_sums(x: np.ndarray, m: int) -> np.ndarray:
+    """Inner sums ``Σ_{i=j}^{j+m-1} Δ²_m x_i`` for j = 0 … N-3m, in O(N).
+
+    A running sum over the second differences themselves (not over x) keeps
+    the cumulative sum of the size of the result, so no digits are lost to
+    cancellation even for random-run phase.
+    """
+    d2 = x[2 * m :] - 2.0 * x[m:-m] + x[: -2 * m]
+    c = np.concatenate(([0.0], np.cumsum(d2)))
+    return c[m:] - c[:-m]
+
+
+def _mvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        s = _mvar_sums(x, int(m))
+        var[i] = np.dot(s, s) / (2.0 * m**2 * (m * tau0) ** 2 * s.size)
+        n[i] = s.size
+    return var, n
+
+
+def _tvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
+    var, n = _mvar_kernel(x, ms, tau0)
+    return var * (ms * tau0) ** 2 / 3.0, n
+
+
+STDVAR = Statistic("stdev", _stdvar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3)
+OSTDVAR = Statistic("ostdev", _ostdvar_kernel, max_m=lambda n: n - 2, stop_ratio=4, min_points=3)
+AVAR = Statistic("adev", _avar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3)
+OAVAR = Statistic("oadev", _oavar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=4, min_points=3)
+MVAR = Statistic("mdev", _mvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3)
+TVAR = Statistic("tdev", _tvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3)
+
+
+@_doc
+def stdev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Standard deviation of non-overlapped m-averages (the tip's STDVAR).
+
+    {common}
+    Notes
+    -----
+    With ``K = ⌊M/m⌋`` averages ``ȳ_k`` of the M frequency samples,
+
+    .. math:: s^2(τ) = \\frac{1}{K-1} \\sum_{k=0}^{K-1} (\\bar y_k - \\bar{\\bar y})^2 .
+
+    For flicker and random-walk frequency noise it grows with the record
+    length; the ratio to AVAR is Barnes' B1 function (numerics.md §1.1, §5.3).
+    ``n`` is the number of averages K.
+
+    References
+    ----------
+    ST DT0064 (STDVAR); W. J. Riley, NIST SP 1065 (2008) §5.2.1.
+
+    Examples
+    --------
+    >>> import sigmatau
+    >>> r = sigmatau.stdev([892, 809, 823, 798, 671, 644, 883, 903, 677], m=1)
+    >>> round(float(r.dev[0]), 3)
+    100.977
+    """
+    return run(STDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+
+
+@_doc
+def ostdev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Standard deviation of overlapped (moving) m-averages (the tip's OSTDVAR).
+
+    {common}
+    Notes
+    -----
+    All ``M - m + 1`` moving averages ``ā_j = (1/m) Σ_{i=j}^{j+m-1} y_i`` enter the
+    sample variance (ddof = 1). ``n`` is their number.
+
+    References
+    ----------
+    ST DT0064 (OSTDVAR).
+    """
+    return run(OSTDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+
+
+@_doc
+def adev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Non-overlapped Allan deviation (AVAR).
+
+    {common}
+    Notes
+    -----
+    With ``K = ⌊(N-1)/m⌋`` non-overlapped frequency averages,
+
+    .. math:: σ_y^2(τ) = \\frac{1}{2τ^2(K-1)} \\sum_{k=0}^{K-2}
+              (x_{(k+2)m} - 2x_{(k+1)m} + x_{km})^2 .
+
+    ``n = K - 1`` terms; O(N/m) per τ.
+
+    References
+    ----------
+    W. J. Riley, NIST SP 1065 (2008) §5.2.2; numerics.md §1.2.
+
+    Examples
+    --------
+    >>> import sigmatau
+    >>> y = [892, 809, 823, 798, 671, 644, 883, 903, 677]
+    >>> [round(float(d), 4) for d in sigmatau.adev(y, m=[1, 2]).dev]
+    [91.2295, 115.8082]
+    """
+    return run(AVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+
+
+@_doc
+def oadev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Overlapped Allan deviation (OAVAR).
+
+    {common}
+    Notes
+    -----
+    .. math:: σ_y^2(τ) = \\frac{1}{2τ^2(N-2m)} \\sum_{i=0}^{N-2m-1}
+              (x_{i+2m} - 2x_{i+m} + x_i)^2 ,
+
+    ``n = N - 2m`` terms; O(N) per τ.
+
+    References
+    ----------
+    W. J. Riley, NIST SP 1065 (2008) §5.2.4; numerics.md §1.3.
+
+    Examples
+    --------
+    >>> import sigmatau
+    >>> y = [892, 809, 823, 798, 671, 644, 883, 903, 677]
+    >>> [round(float(d), 5) for d in sigmatau.oadev(y, m=[1, 2]).dev]
+    [91.22945, 85.95287]
+    """
+    return run(OAVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+
+
+@_doc
+def mdev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Modified Allan deviation (MVAR).
+
+    {common}
+    Notes
+    -----
+    .. math:: \\mathrm{Mod}\\,σ_y^2(τ) = \\frac{1}{2m^2τ^2(N-3m+1)} \\sum_{j=0}^{N-3m}
+              \\Big[\\sum_{i=j}^{j+m-1} (x_{i+2m} - 2x_{i+m} + x_i)\\Big]^2 ,
+
+    ``n = N - 3m + 1`` terms. The inner sums are a running sum of the second
+    differences, so the cost is O(N) per τ, not O(N·m).
+
+    References
+    ----------
+    W. J. Riley, NIST SP 1065 (2008) §5.2.5; numerics.md §1.4.
+
+    Examples
+    --------
+    >>> import sigmatau
+    >>> y = [892, 809, 823, 798, 671, 644, 883, 903, 677]
+    >>> [round(float(d), 5) for d in sigmatau.mdev(y, m=[1, 2]).dev]
+    [91.22945, 74.78849]
+    """
+    return run(MVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+
+
+@_doc
+def tdev(
+    data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
+    points_per_decade: int = 10,
+) -> StabilityResult:
+    """Time deviation (TVAR = τ²/3 · MVAR), in the unit of the phase data.
+
+    {common}
+    Notes
+    -----
+    .. math:: σ_x^2(τ) = \\frac{τ^2}{3}\\,\\mathrm{Mod}\\,σ_y^2(τ) .
+
+    Best suited to white phase noise (slope −½ on TDEV).
+
+    References
+    ----------
+    W. J. Riley, NIST SP 1065 (2008) §5.2.6; numerics.md §1.5.
+
+    Examples
+    --------
+    >>> import sigmatau
+    >>> y = [892, 809, 823, 798, 671, 644, 883, 903, 677]
+    >>> [round(float(d), 5) for d in sigmatau.tdev(y, m=[1, 2]).dev]
+    [52.67135, 86.35831]
+    """
+    return run(TVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)

@@ -1,0 +1,147 @@
+"""Result types shared by every stage (statistics, uncertainty, noise identification)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from dataclasses import dataclass, fields
+from typing import Any, Optional
+
+import numpy as np
+
+__all__ = ["StabilityResult"]
+
+_ARRAY_FIELDS = (
+    "taus", "m", "var", "dev", "n", "bias_factor",
+    "alpha", "alpha_estimate", "edf", "ci_low", "ci_high",
+)
+
+
+@dataclass(frozen=True, repr=False, eq=False)
+class StabilityResult:
+    """One statistic evaluated over a grid of averaging times.
+
+    Attributes
+    ----------
+    statistic : str
+        Name of the statistic (``"oadev"``, ``"mtotdev"`` …).
+    taus : numpy.ndarray
+        Averaging times τ in seconds (0.75·m·τ0 for Theo1/TheoBR).
+    m : numpy.ndarray
+        Averaging factors.
+    var, dev : numpy.ndarray
+        The variance and the deviation ``sqrt(var)``. For TDEV/TTOT they are in
+        the phase unit (seconds for clocks); for MTIE/TIE rms ``dev`` is the time
+        error and ``var = dev**2``.
+    n : numpy.ndarray
+        Number of terms summed by the estimator at each τ.
+    rate : float
+        Sample rate in Hz (τ0 = 1/rate).
+    data_type : {"freq", "phase"}
+        Kind of the input data.
+    n_points : int
+        Number of phase points N behind the estimate (frequency samples + 1).
+    bias : str
+        Bias correction applied to ``var``: ``"none"`` or a description such as
+        ``"stable32 alpha=0"``.
+    bias_factor : numpy.ndarray or None
+        Divisor applied to the raw variance at each τ (1 where none).
+    alpha, alpha_estimate, edf, ci_low, ci_high, confidence, ci_reason
+        Noise type (integer and fractional), equivalent degrees of freedom and
+        the deviation interval at ``confidence``; ``None`` until filled.
+    """
+
+    statistic: str
+    taus: np.ndarray
+    m: np.ndarray
+    var: np.ndarray
+    dev: np.ndarray
+    n: np.ndarray
+    rate: float
+    data_type: str
+    n_points: int
+    bias: str = "none"
+    bias_factor: Optional[np.ndarray] = None
+    alpha: Optional[np.ndarray] = None
+    alpha_estimate: Optional[np.ndarray] = None
+    edf: Optional[np.ndarray] = None
+    ci_low: Optional[np.ndarray] = None
+    ci_high: Optional[np.ndarray] = None
+    confidence: Optional[float] = None
+    ci_reason: Optional[tuple[str, ...]] = None
+
+    def __post_init__(self) -> None:
+        for name in _ARRAY_FIELDS:
+            value = getattr(self, name)
+            if value is not None:
+                arr = np.array(value, copy=True)
+                arr.setflags(write=False)
+                object.__setattr__(self, name, arr)
+
+    def __len__(self) -> int:
+        return int(self.taus.size)
+
+    def columns(self) -> list[str]:
+        """Names of the per-τ columns present in this result, in table order."""
+        cols = ["m", "taus", "n"]
+        if self.alpha is not None:
+            cols.append("alpha")
+        if self.ci_low is not None:
+            cols.append("ci_low")
+        cols.append("dev")
+        if self.ci_high is not None:
+            cols.append("ci_high")
+        if self.edf is not None:
+            cols.append("edf")
+        return cols
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-Python dictionary of every field (arrays as lists), JSON-ready."""
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, np.ndarray):
+                value = value.tolist()
+            elif isinstance(value, tuple):
+                value = list(value)
+            out[f.name] = value
+        return out
+
+    def to_table(self) -> str:
+        """Fixed-width text table, one row per τ (the layout of a Stable32 run)."""
+        cols = self.columns()
+        head = {"m": "m", "taus": "tau [s]", "n": "n", "alpha": "alpha",
+                "ci_low": "min dev", "dev": "dev", "ci_high": "max dev", "edf": "edf"}
+        rows = [[head[c] for c in cols]]
+        for i in range(len(self)):
+            row = []
+            for c in cols:
+                v = getattr(self, c)[i]
+                row.append(str(int(v)) if c in ("m", "n", "alpha") else f"{v:.6e}" if c != "edf" else f"{v:.2f}")
+            rows.append(row)
+        widths = [max(len(r[j]) for r in rows) for j in range(len(cols))]
+        lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
+        title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points, bias: {self.bias})"
+        return "\n".join([title, *lines])
+
+    def to_csv(self) -> str:
+        """CSV text with a header row and one row per τ."""
+        cols = self.columns()
+        buf = io.StringIO()
+        writer = csv.writer(buf, lineterminator="\n")
+        writer.writerow(cols)
+        for i in range(len(self)):
+            writer.writerow([repr(getattr(self, c)[i].item()) for c in cols])
+        return buf.getvalue()
+
+    def __repr__(self) -> str:
+        if len(self) == 0:
+            return f"StabilityResult({self.statistic}, empty)"
+        return (
+            f"StabilityResult({self.statistic}, {len(self)} τ from {self.taus[0]:.4g} s to"
+            f" {self.taus[-1]:.4g} s, dev {self.dev[0]:.4g} … {self.dev[-1]:.4g},"
+            f" {self.data_type} data at {self.rate:g} Hz)"
+        )
+
+    def __str__(self) -> str:
+        return self.to_table()
