@@ -1,0 +1,54 @@
+"""The public API is pinned, and importing sigmatau stays light."""
+
+import subprocess
+import sys
+
+import sigmatau
+
+STATISTICS = [
+    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
+]
+
+
+def test_public_names_are_exported():
+    for name in STATISTICS + ["StabilityResult", "SigmaTauError", "ParameterError", "DataError",
+                              "SigmaTauWarning", "RangeWarning", "frequency_to_phase",
+                              "phase_to_frequency", "__version__"]:
+        assert name in sigmatau.__all__, name
+        assert hasattr(sigmatau, name), name
+
+
+def test_all_lists_only_existing_names():
+    missing = [n for n in sigmatau.__all__ if not hasattr(sigmatau, n)]
+    assert missing == []
+
+
+def test_statistics_share_one_signature():
+    import inspect
+
+    expected = ["data", "rate", "data_type", "taus", "m", "points_per_decade"]
+    for name in STATISTICS:
+        params = inspect.signature(getattr(sigmatau, name)).parameters
+        assert list(params)[: len(expected)] == expected, name
+        assert params["rate"].default == 1.0
+        assert params["data_type"].default == "freq"
+        assert params["taus"].default == "octave"
+        assert all(p.kind is p.KEYWORD_ONLY for p in list(params.values())[1:]), name
+
+
+def test_error_hierarchy():
+    assert issubclass(sigmatau.ParameterError, ValueError)
+    assert issubclass(sigmatau.ParameterError, sigmatau.SigmaTauError)
+    assert issubclass(sigmatau.DataError, sigmatau.SigmaTauError)
+    assert issubclass(sigmatau.RangeWarning, sigmatau.SigmaTauWarning)
+    assert issubclass(sigmatau.SigmaTauWarning, UserWarning)
+
+
+def test_import_loads_no_plotting_or_io_backend():
+    code = (
+        "import sys, sigmatau; "
+        "heavy = [m for m in ('matplotlib', 'rosbags', 'h5py', 'pyarrow', 'pandas', 'dask') if m in sys.modules]; "
+        "print(','.join(heavy))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
