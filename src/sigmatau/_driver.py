@@ -73,9 +73,9 @@ def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> t
     else:
         x = to_phase(series, rate_f, dtype)
     if x.size < stat.min_points:
-        have = f"{series.size} {'phase' if dtype == 'phase' else 'frequency'} samples"
+        kind = "phase" if dtype == "phase" else "frequency"
         need = stat.min_points if dtype == "phase" else stat.min_points - 1
-        raise DataError(f"{stat.name} needs at least {need} {dtype} samples, got {have}")
+        raise DataError(f"{stat.name} needs at least {need} {kind} samples, got {series.size}")
     return x, rate_f, dtype
 
 

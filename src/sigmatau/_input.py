@@ -39,8 +39,8 @@ def as_series(data: object, name: str = "data") -> np.ndarray:
     """
     try:
         arr = np.asarray(data)
-    except Exception as exc:  # ragged lists and the like
-        raise DataError(f"{name} cannot be read as a numeric array: {exc}") from None
+    except Exception:  # ragged lists and the like
+        raise DataError(f"{name} cannot be read as a numeric array (ragged or mixed sequence?)") from None
     if arr.dtype == object or not (
         np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.bool_)
     ):
@@ -60,7 +60,7 @@ def as_series(data: object, name: str = "data") -> np.ndarray:
         bad = int(np.flatnonzero(~finite)[0])
         count = int((~finite).sum())
         raise DataError(
-            f"{name} holds {count} non-finite value(s) (first at index {bad}: {arr[bad]!r});"
+            f"{name} holds {count} non-finite value(s) (first at index {bad}: {float(arr[bad])});"
             " remove or fill them first"
         )
     return arr
@@ -68,6 +68,9 @@ def as_series(data: object, name: str = "data") -> np.ndarray:
 
 def check_rate(rate: object) -> float:
     """Return the sample rate as a positive finite float, or raise ParameterError."""
+    # float() would also parse "2", b"2" and True: none of them is a sample rate.
+    if isinstance(rate, (str, bytes, bool, np.bool_)):
+        raise ParameterError(f"rate={rate!r} must be a positive number (Hz)")
     try:
         value = float(rate)  # type: ignore[arg-type]
     except (TypeError, ValueError):

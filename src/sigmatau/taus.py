@@ -12,6 +12,8 @@ estimate has few degrees of freedom; the design tip recommends even less (about
 10 % of the record for OAVAR/OHVAR, 30-50 % for the total variances, 75 % for
 Theo1). Explicit ``m`` or ``taus`` may go beyond the default up to the
 mathematical limit of the estimator, with a :class:`~sigmatau.errors.RangeWarning`.
+``m`` replaces the default ``taus="octave"``; giving ``m`` together with any other
+``taus`` is a :class:`~sigmatau.errors.ParameterError`.
 """
 
 from __future__ import annotations
@@ -113,6 +115,7 @@ def select_m(
     default_max = min(m_max, max(m_min, int(n_points // stop_ratio)))
     explicit = m is not None or not isinstance(taus, str)
     if m is not None:
+        # "octave" is the default of taus: explicit m overrides it.
         if not (isinstance(taus, str) and taus == "octave"):
             raise ParameterError(f"give either taus={taus!r} or m, not both")
         ms = _as_int_factors(m)
