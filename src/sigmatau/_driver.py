@@ -9,7 +9,7 @@ converts frequency data to phase, chooses the averaging factors and builds the
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable
+from typing import Callable, Optional
 
 import numpy as np
 
@@ -50,6 +50,12 @@ class Statistic:
     trend_invariant : bool
         The estimator ignores a linear phase trend (a constant frequency offset),
         so the driver removes it before ``compute`` to protect precision.
+    compute_freq : Kernel, optional
+        Same contract as ``compute`` but receives the frequency samples (mean
+        removed when ``trend_invariant``) instead of the phase. Used for
+        frequency input: differencing the samples themselves avoids the
+        round-off of an integrated phase that is much larger than its
+        differences (random-walk and random-run FM, drifting sensors).
     """
 
     name: str
@@ -61,22 +67,37 @@ class Statistic:
     even: bool = False
     tau_factor: float = 1.0
     trend_invariant: bool = True
+    compute_freq: Optional[Kernel] = None
 
 
-def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str]:
-    """Validate the data and return ``(phase, rate, data_type)``."""
+def _validated(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str, int]:
+    """Validated ``(samples, rate, data_type, n_points)``; N = number of phase points."""
     rate_f = check_rate(rate)
     dtype = check_data_type(data_type)
     series = as_series(data)
-    if stat.trend_invariant:
-        x = to_phase(series - series.mean(), rate_f, dtype) if dtype == "freq" else remove_linear_phase(series)
-    else:
-        x = to_phase(series, rate_f, dtype)
-    if x.size < stat.min_points:
+    n_points = series.size if dtype == "phase" else series.size + 1
+    if n_points < stat.min_points:
         kind = "phase" if dtype == "phase" else "frequency"
         need = stat.min_points if dtype == "phase" else stat.min_points - 1
         raise DataError(f"{stat.name} needs at least {need} {kind} samples, got {series.size}")
-    return x, rate_f, dtype
+    return series, rate_f, dtype, n_points
+
+
+def _phase_of(stat: Statistic, series: np.ndarray, rate: float, dtype: str) -> np.ndarray:
+    if not stat.trend_invariant:
+        return to_phase(series, rate, dtype)
+    if dtype == "freq":
+        return to_phase(series - series.mean(), rate, dtype)
+    return remove_linear_phase(series)
+
+
+def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str]:
+    """Validate the data and return ``(phase, rate, data_type)``.
+
+    The phase has its linear trend removed when the statistic is invariant to it.
+    """
+    series, rate_f, dtype, _ = _validated(stat, data, rate, data_type)
+    return _phase_of(stat, series, rate_f, dtype), rate_f, dtype
 
 
 def run(
@@ -90,23 +111,29 @@ def run(
     points_per_decade: int = 10,
 ) -> StabilityResult:
     """Compute ``stat`` on ``data`` and return its result (raw, without bias correction)."""
-    x, rate_f, dtype = prepare(stat, data, rate, data_type)
+    series, rate_f, dtype, n_points = _validated(stat, data, rate, data_type)
+    use_freq = dtype == "freq" and stat.compute_freq is not None
+    if use_freq:
+        series = series - series.mean() if stat.trend_invariant else series
+    else:
+        series = _phase_of(stat, series, rate_f, dtype)
     ms = select_m(
         stat.name,
-        n_points=x.size,
+        n_points=n_points,
         rate=rate_f,
         taus=taus,
         m=m,
         points_per_decade=points_per_decade,
         m_min=stat.min_m,
-        m_max=stat.max_m(x.size),
+        m_max=stat.max_m(n_points),
         stop_ratio=stat.stop_ratio,
         even=stat.even,
         tau_factor=stat.tau_factor,
     )
     tau0 = 1.0 / rate_f
+    kernel = stat.compute_freq if use_freq else stat.compute
     if ms.size:
-        var, n = stat.compute(x, ms, tau0)
+        var, n = kernel(series, ms, tau0)
     else:
         var, n = np.empty(0), np.empty(0, dtype=np.int64)
     var = np.asarray(var, dtype=float)
@@ -121,5 +148,5 @@ def run(
         n=np.asarray(n, dtype=np.int64),
         rate=rate_f,
         data_type=dtype,
-        n_points=int(x.size),
+        n_points=int(n_points),
     )

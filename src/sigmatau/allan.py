@@ -120,12 +120,86 @@ def _tvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     return var * (ms * tau0) ** 2 / 3.0, n
 
 
-STDVAR = Statistic("stdev", _stdvar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3)
-OSTDVAR = Statistic("ostdev", _ostdvar_kernel, max_m=lambda n: n - 2, stop_ratio=4, min_points=3)
-AVAR = Statistic("adev", _avar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3)
-OAVAR = Statistic("oadev", _oavar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=4, min_points=3)
-MVAR = Statistic("mdev", _mvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3)
-TVAR = Statistic("tdev", _tvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3)
+# --- kernels on frequency samples y (mean removed): no integration, so no phase
+# round-off; each is algebraically identical to its phase kernel above. ----------
+
+
+def window_sums(v: np.ndarray, m: int) -> np.ndarray:
+    """Sums of ``m`` consecutive values of ``v`` (``v.size - m + 1`` of them), in O(N).
+
+    ``v`` is always a difference series here, so its running sum stays of the
+    order of a few window sums and the subtraction loses no significant digits.
+    """
+    if m == 1:
+        return v.copy()
+    c = np.empty(v.size + 1)
+    c[0] = 0.0
+    np.cumsum(v, out=c[1:])
+    return c[m:] - c[:-m]
+
+
+def block_means(y: np.ndarray, m: int) -> np.ndarray:
+    """Means of the ``⌊M/m⌋`` non-overlapped blocks of ``m`` samples starting at 0."""
+    k = y.size // m
+    return y[: k * m].reshape(k, m).mean(axis=1)
+
+
+def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    out = [block_means(y, int(m)) for m in ms]
+    return np.array([b.var(ddof=1) for b in out]), np.array([b.size for b in out])
+
+
+def _ostdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    out = [window_sums(y, int(m)) / m for m in ms]
+    return np.array([a.var(ddof=1) for a in out]), np.array([a.size for a in out])
+
+
+def _avar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        d = np.diff(block_means(y, int(m)))
+        var[i] = np.dot(d, d) / (2.0 * d.size)
+        n[i] = d.size
+    return var, n
+
+
+def _oavar_sums(y: np.ndarray, m: int) -> np.ndarray:
+    """``Σ_{i=j}^{j+m-1} (y_{i+m} - y_i) = Δ²_m x_j / τ0`` for j = 0 … M-2m."""
+    return window_sums(y[m:] - y[:-m], m)
+
+
+def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        s = _oavar_sums(y, int(m))
+        var[i] = np.dot(s, s) / (2.0 * m**2 * s.size)
+        n[i] = s.size
+    return var, n
+
+
+def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        t = window_sums(_oavar_sums(y, int(m)), int(m))
+        var[i] = np.dot(t, t) / (2.0 * float(m) ** 4 * t.size)
+        n[i] = t.size
+    return var, n
+
+
+def _tvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    var, n = _mvar_freq(y, ms, tau0)
+    return var * (ms * tau0) ** 2 / 3.0, n
+
+
+STDVAR = Statistic("stdev", _stdvar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3, compute_freq=_stdvar_freq)
+OSTDVAR = Statistic("ostdev", _ostdvar_kernel, max_m=lambda n: n - 2, stop_ratio=4, min_points=3, compute_freq=_ostdvar_freq)
+AVAR = Statistic("adev", _avar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=5, min_points=3, compute_freq=_avar_freq)
+OAVAR = Statistic("oadev", _oavar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=4, min_points=3, compute_freq=_oavar_freq)
+MVAR = Statistic("mdev", _mvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3, compute_freq=_mvar_freq)
+TVAR = Statistic("tdev", _tvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min_points=3, compute_freq=_tvar_freq)
 
 
 @_doc
@@ -205,8 +279,8 @@ def adev(
     --------
     >>> import sigmatau
     >>> y = [892, 809, 823, 798, 671, 644, 883, 903, 677]
-    >>> [round(float(d), 4) for d in sigmatau.adev(y, m=[1, 2]).dev]
-    [91.2295, 115.8082]
+    >>> [round(float(d), 5) for d in sigmatau.adev(y, m=[1, 2]).dev]
+    [91.22945, 115.80821]
     """
     return run(AVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
 

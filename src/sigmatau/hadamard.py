@@ -10,7 +10,7 @@ import numpy as np
 
 from ._driver import Statistic, run
 from ._input import DataType
-from .allan import _doc
+from .allan import _doc, block_means, window_sums
 from .result import StabilityResult
 
 __all__ = ["hdev", "ohdev"]
@@ -37,8 +37,30 @@ def _ohvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
-HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=5, min_points=4)
-OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=4, min_points=4)
+def _hvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        b = block_means(y, int(m))
+        d = b[2:] - 2.0 * b[1:-1] + b[:-2]
+        var[i] = np.dot(d, d) / (6.0 * d.size)
+        n[i] = d.size
+    return var, n
+
+
+def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = Δ³_m x_j / τ0
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m in enumerate(ms):
+        s = window_sums(y[2 * m :] - 2.0 * y[m:-m] + y[: -2 * m], int(m))
+        var[i] = np.dot(s, s) / (6.0 * m**2 * s.size)
+        n[i] = s.size
+    return var, n
+
+
+HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=5, min_points=4, compute_freq=_hvar_freq)
+OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=4, min_points=4, compute_freq=_ohvar_freq)
 
 
 @_doc
