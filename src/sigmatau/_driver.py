@@ -14,11 +14,13 @@ from typing import Callable, Optional
 import numpy as np
 
 from ._input import as_series, check_data_type, check_rate, remove_linear_phase, to_phase
+from ._uncertainty import attach, check_options
+from .confidence import ONE_SIGMA
 from .errors import DataError
 from .result import StabilityResult
 from .taus import select_m
 
-__all__ = ["Statistic", "run", "prepare"]
+__all__ = ["Statistic", "run", "prepare", "finish"]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
 #: averaging factor in ``ms``, from the phase series ``x``.
@@ -109,9 +111,21 @@ def run(
     taus: object,
     m: object,
     points_per_decade: int = 10,
+    alpha: object = None,
+    confidence: object = ONE_SIGMA,
+    ci: object = "chi2",
+    raw: bool = False,
 ) -> StabilityResult:
-    """Compute ``stat`` on ``data`` and return its result (raw, without bias correction)."""
+    """Compute ``stat`` on ``data`` and return its result.
+
+    The variance is the raw estimator (no bias correction). Unless ``ci`` is
+    None, each row also gets its noise type, EDF and interval
+    (:mod:`sigmatau._uncertainty`); ``raw=True`` skips that step for callers
+    that attach it themselves (after a bias correction, for instance).
+    """
+    alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     series, rate_f, dtype, n_points = _validated(stat, data, rate, data_type)
+    given = series
     use_freq = dtype == "freq" and stat.compute_freq is not None
     if use_freq:
         series = series - series.mean() if stat.trend_invariant else series
@@ -139,7 +153,7 @@ def run(
     var = np.asarray(var, dtype=float)
     # Round-off can leave a tiny negative variance for constant data.
     var = np.where(var < 0.0, 0.0, var)
-    return StabilityResult(
+    result = StabilityResult(
         statistic=stat.name,
         taus=stat.tau_factor * ms * tau0,
         m=ms,
@@ -150,3 +164,24 @@ def run(
         data_type=dtype,
         n_points=int(n_points),
     )
+    if raw:
+        return result
+    return attach(result, given, dtype, alpha=alpha_i, confidence=conf, ci=ci_m,
+                  id_factors=_id_factors(stat, ms))
+
+
+def _id_factors(stat: Statistic, ms: np.ndarray) -> np.ndarray:
+    """Averaging factors at which the noise type is identified: that of the τ reported."""
+    if stat.tau_factor == 1.0:
+        return ms
+    return np.maximum(1, np.round(stat.tau_factor * ms)).astype(np.int64)
+
+
+def finish(result: StabilityResult, data: object, data_type: str, *, alpha: object = None,
+           confidence: object = ONE_SIGMA, ci: object = "chi2",
+           identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
+    """Attach noise type, EDF and interval to a result built with ``run(..., raw=True)``."""
+    alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
+    given = as_series(data)
+    return attach(result, given, data_type, alpha=alpha_i, confidence=conf, ci=ci_m,
+                  id_factors=None if identified is not None else result.m, identified=identified)

@@ -7,10 +7,14 @@ in :mod:`sigmatau.filterchain` and the tests hold these fast paths to them.
 
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from ._driver import Statistic, run
 from ._input import DataType
+from ._uncertainty import CiMethod
+from .confidence import ONE_SIGMA
 from .result import StabilityResult
 
 __all__ = ["stdev", "ostdev", "adev", "oadev", "mdev", "tdev"]
@@ -36,10 +40,22 @@ _DOC_COMMON = """
         Explicit averaging factors instead of ``taus``.
     points_per_decade : int
         Density of the ``"log"`` grid.
+    alpha : int, optional
+        Force this noise type (2 WPM, 1 FPM, 0 WFM, −1 FFM, −2 RWFM, −3 FWFM,
+        −4 RRFM) at every τ for the EDF; by default it is identified at each τ
+        (lag-1 autocorrelation, B1, R(n): :func:`sigmatau.noiseid.identify`).
+    confidence : float
+        Two-sided coverage of the interval, default ±1σ (0.6827).
+    ci : {"chi2", "simple", None}
+        ``"chi2"``: exact χ² interval from the EDF (Greenhall–Riley or the
+        SP1065 empirical EDF); ``"simple"``: the design tip's dev ± dev/√n;
+        None: no noise identification and no interval (fastest).
 
     Returns
     -------
     StabilityResult
+        With ``alpha``, ``alpha_estimate``, ``edf``, ``ci_low``, ``ci_high``
+        and ``ci_reason`` filled unless ``ci`` is None.
 """
 
 
@@ -205,7 +221,8 @@ TVAR = Statistic("tdev", _tvar_kernel, max_m=lambda n: n // 3, stop_ratio=4, min
 @_doc
 def stdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Standard deviation of non-overlapped m-averages (the tip's STDVAR).
 
@@ -231,13 +248,15 @@ def stdev(
     >>> round(float(r.dev[0]), 3)
     100.977
     """
-    return run(STDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(STDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def ostdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Standard deviation of overlapped (moving) m-averages (the tip's OSTDVAR).
 
@@ -251,13 +270,15 @@ def ostdev(
     ----------
     ST DT0064 (OSTDVAR).
     """
-    return run(OSTDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(OSTDVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def adev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Non-overlapped Allan deviation (AVAR).
 
@@ -282,13 +303,15 @@ def adev(
     >>> [round(float(d), 5) for d in sigmatau.adev(y, m=[1, 2]).dev]
     [91.22945, 115.80821]
     """
-    return run(AVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(AVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def oadev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Overlapped Allan deviation (OAVAR).
 
@@ -311,13 +334,15 @@ def oadev(
     >>> [round(float(d), 5) for d in sigmatau.oadev(y, m=[1, 2]).dev]
     [91.22945, 85.95287]
     """
-    return run(OAVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(OAVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def mdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Modified Allan deviation (MVAR).
 
@@ -341,13 +366,15 @@ def mdev(
     >>> [round(float(d), 5) for d in sigmatau.mdev(y, m=[1, 2]).dev]
     [91.22945, 74.78849]
     """
-    return run(MVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(MVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def tdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Time deviation (TVAR = τ²/3 · MVAR), in the unit of the phase data.
 
@@ -369,4 +396,5 @@ def tdev(
     >>> [round(float(d), 5) for d in sigmatau.tdev(y, m=[1, 2]).dev]
     [52.67135, 86.35831]
     """
-    return run(TVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(TVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)

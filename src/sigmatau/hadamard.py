@@ -6,10 +6,14 @@ converge for noise down to random-run FM (α > −5).
 
 from __future__ import annotations
 
+from typing import Optional
+
 import numpy as np
 
 from ._driver import Statistic, run
 from ._input import DataType
+from ._uncertainty import CiMethod
+from .confidence import ONE_SIGMA
 from .allan import _doc, block_means, window_sums
 from .result import StabilityResult
 
@@ -66,7 +70,8 @@ OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_rat
 @_doc
 def hdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Non-overlapped Hadamard deviation (HVAR).
 
@@ -92,13 +97,15 @@ def hdev(
     >>> [round(float(d), 4) for d in sigmatau.hdev(y, m=[1, 2]).dev]
     [70.8061, 116.798]
     """
-    return run(HVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(HVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)
 
 
 @_doc
 def ohdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
-    points_per_decade: int = 10,
+    points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
+    ci: Optional[CiMethod] = "chi2",
 ) -> StabilityResult:
     """Overlapped Hadamard deviation (OHVAR).
 
@@ -121,4 +128,5 @@ def ohdev(
     >>> [round(float(d), 5) for d in sigmatau.ohdev(y, m=[1, 2]).dev]
     [70.80607, 85.61487]
     """
-    return run(OHVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade)
+    return run(OHVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)

@@ -588,8 +588,8 @@ def rn_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
         raise InsufficientDataError(f"R(n) needs at least {3 * m} phase points at m={m}, got {npts}")
     with warnings.catch_warnings():  # long-τ factors are the point here
         warnings.simplefilter("ignore", RangeWarning)
-        mv = mdev(series, data_type=dtype, m=[m]).var[0]
-        av = oadev(series, data_type=dtype, m=[m]).var[0]
+        mv = mdev(series, data_type=dtype, m=[m], ci=None).var[0]
+        av = oadev(series, data_type=dtype, m=[m], ci=None).var[0]
     if av == 0.0:
         raise DataError(f"the Allan variance is zero at m={m}; R(n) is undefined")
     return float(mv / av)

@@ -116,12 +116,20 @@ class StabilityResult:
         for i in range(len(self)):
             row = []
             for c in cols:
-                v = getattr(self, c)[i]
-                row.append(str(int(v)) if c in ("m", "n", "alpha") else f"{v:.6e}" if c != "edf" else f"{v:.2f}")
+                v = float(getattr(self, c)[i])
+                if not np.isfinite(v):
+                    row.append("-")
+                elif c in ("m", "n", "alpha"):
+                    row.append(str(int(v)))
+                else:
+                    row.append(f"{v:.2f}" if c == "edf" else f"{v:.6e}")
             rows.append(row)
         widths = [max(len(r[j]) for r in rows) for j in range(len(cols))]
         lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
-        title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points, bias: {self.bias})"
+        title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points, bias: {self.bias}"
+        if self.confidence is not None:
+            title += f", {100 * self.confidence:.1f} % interval"
+        title += ")"
         return "\n".join([title, *lines])
 
     def to_csv(self) -> str:

@@ -1,0 +1,172 @@
+"""Noise type, equivalent degrees of freedom and interval for each row of a result.
+
+The statistic functions call :func:`attach` on the raw result. At each τ:
+
+1. the noise type α is identified (numerics.md §5.5, :func:`sigmatau.noiseid.identify`)
+   unless the caller forces one with ``alpha=``;
+2. the EDF ν follows from α, m and N (:func:`sigmatau.confidence.edf_array`);
+3. the deviation interval is the exact χ² interval at ``confidence``
+   (:func:`sigmatau.confidence.deviation_interval`), single-sided (upper bound only)
+   where ν < :data:`SINGLE_SIDED_EDF`; or, with ``ci="simple"``, the design
+   tip's estimate dev ± dev/√n.
+
+A row that cannot get an interval keeps NaN bounds and says why in ``ci_reason``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Literal, Optional, Union
+
+import numpy as np
+
+from .confidence import EDF_STATISTICS, ONE_SIGMA, deviation_interval, edf_array
+from .errors import DataError, ParameterError
+from .result import StabilityResult
+
+__all__ = ["CI_METHODS", "SINGLE_SIDED_EDF", "attach", "check_options"]
+
+CiMethod = Literal["chi2", "simple"]
+CI_METHODS = ("chi2", "simple", None)
+
+#: Below this EDF a two-sided interval is meaningless; only an upper bound is given.
+SINGLE_SIDED_EDF = 1.0
+
+#: Statistics for which no χ² interval is defined (extreme-value or plain RMS statistics).
+_NO_INTERVAL = {
+    "mtie": "no confidence interval is defined for MTIE (an extreme-value statistic)",
+    "tierms": "no confidence interval is defined for TIE rms",
+}
+
+_ALPHA_RANGE = (-4, 2)
+
+
+def check_options(alpha: object, confidence: object, ci: object) -> tuple[Optional[int], float, Optional[str]]:
+    """Validate the ``alpha``, ``confidence`` and ``ci`` keywords of a statistic."""
+    if ci not in CI_METHODS:
+        raise ParameterError(f"ci={ci!r} must be 'chi2', 'simple' or None")
+    try:
+        conf = float(confidence)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ParameterError(f"confidence={confidence!r} must be a number in (0, 1)") from None
+    if isinstance(confidence, (bool, str)) or not (0.0 < conf < 1.0):
+        raise ParameterError(f"confidence={confidence!r} must be a number in (0, 1)")
+    if alpha is None:
+        return None, conf, ci  # type: ignore[return-value]
+    if isinstance(alpha, (bool, np.bool_)) or not isinstance(alpha, (int, np.integer)):
+        if not (isinstance(alpha, float) and alpha.is_integer()):
+            raise ParameterError(f"alpha={alpha!r} must be an integer noise exponent from -4 to 2")
+    a = int(alpha)  # type: ignore[arg-type]
+    if not (_ALPHA_RANGE[0] <= a <= _ALPHA_RANGE[1]):
+        raise ParameterError(f"alpha={alpha!r} must be an integer noise exponent from -4 to 2")
+    return a, conf, ci  # type: ignore[return-value]
+
+
+def _identify(result: StabilityResult, data: np.ndarray, data_type: str, id_factors: np.ndarray):
+    from .noiseid import identify
+
+    try:
+        ident = identify(data, id_factors, data_type=data_type, family=result.statistic)
+    except DataError as exc:
+        reason = f"noise type not identified ({exc}); give alpha= for an interval"
+        n = len(result)
+        return np.full(n, np.nan), np.full(n, np.nan), (reason,) * n
+    return ident.alpha.astype(float), ident.alpha_estimate, ("",) * len(result)
+
+
+def attach(
+    result: StabilityResult,
+    data: np.ndarray,
+    data_type: str,
+    *,
+    alpha: Optional[int],
+    confidence: float,
+    ci: Optional[str],
+    id_factors: Optional[np.ndarray] = None,
+    identified: Optional[tuple[np.ndarray, np.ndarray]] = None,
+) -> StabilityResult:
+    """Return ``result`` with ``alpha``, ``alpha_estimate``, ``edf``, ``ci_low``,
+    ``ci_high``, ``confidence`` and ``ci_reason`` filled.
+
+    Parameters
+    ----------
+    result : StabilityResult
+        Raw result of a statistic.
+    data, data_type
+        The user's samples as given (noise identification works on them).
+    alpha : int or None
+        Forced noise type for every τ; None identifies it per τ.
+    confidence : float
+        Two-sided coverage of the interval.
+    ci : {"chi2", "simple", None}
+        Interval method; None leaves every uncertainty field empty.
+    id_factors : array of int, optional
+        Averaging factors at which to identify the noise (default ``result.m``;
+        the Theo family passes the factor of the equivalent Allan τ).
+    identified : (alpha, alpha_estimate), optional
+        Noise type already determined by the statistic itself (TheoBR from κ).
+    """
+    if ci is None or len(result) == 0:
+        return result
+    n_rows = len(result)
+    if result.statistic in _NO_INTERVAL:
+        reason = _NO_INTERVAL[result.statistic]
+        nan = np.full(n_rows, np.nan)
+        return dataclasses.replace(result, edf=nan, ci_low=nan, ci_high=nan, confidence=confidence,
+                                   ci_reason=(reason,) * n_rows)
+    has_edf = result.statistic in EDF_STATISTICS
+    if alpha is not None:
+        if has_edf:
+            edf_array(result.statistic, alpha, result.m[:1], max(result.n_points, 1), unsupported="raise")
+        a = np.full(n_rows, float(alpha))
+        est = np.full(n_rows, np.nan)
+        reasons = ("",) * n_rows
+    elif identified is not None:
+        a, est = (np.asarray(v, dtype=float) for v in identified)
+        reasons = tuple("" if math.isfinite(v) else "noise type not identified" for v in a)
+    else:
+        factors = result.m if id_factors is None else id_factors
+        a, est, reasons = _identify(result, data, data_type, factors)
+
+    known = np.isfinite(a)
+    nu = np.full(n_rows, np.nan)
+    edf_reasons = list(reasons)
+    if not has_edf:
+        edf_reasons = [f"no published EDF for {result.statistic}"] * n_rows
+    elif known.any():
+        vals, why = edf_array(result.statistic, a[known].astype(np.int64), result.m[known],
+                              result.n_points, return_reason=True, unsupported="nan")
+        nu[known] = vals
+        for i, w in zip(np.flatnonzero(known), why):
+            edf_reasons[i] = w
+    low = np.full(n_rows, np.nan)
+    high = np.full(n_rows, np.nan)
+    if ci == "simple":
+        err = result.dev / np.sqrt(np.maximum(result.n, 1))
+        ok = result.n >= 1
+        low[ok] = np.maximum(result.dev[ok] - err[ok], 0.0)
+        high[ok] = result.dev[ok] + err[ok]
+        edf_reasons = [r if ok[i] else "no terms" for i, r in enumerate(edf_reasons)]
+        edf_reasons = [r if not (ok[i] and r) else "" for i, r in enumerate(edf_reasons)]
+    else:
+        two = np.isfinite(nu) & (nu >= SINGLE_SIDED_EDF)
+        one = np.isfinite(nu) & (nu > 0) & (nu < SINGLE_SIDED_EDF)
+        if two.any():
+            lo, hi = deviation_interval(result.dev[two], nu[two], confidence)
+            low[two], high[two] = lo, hi
+        if one.any():
+            lo, hi = deviation_interval(result.dev[one], nu[one], confidence, sided="upper")
+            low[one], high[one] = lo, hi
+            for i in np.flatnonzero(one):
+                edf_reasons[i] = f"edf {nu[i]:.2g} < {SINGLE_SIDED_EDF:g}: single-sided upper bound"
+    return dataclasses.replace(
+        result,
+        alpha=a,
+        alpha_estimate=est,
+        edf=nu,
+        ci_low=low,
+        ci_high=high,
+        confidence=confidence,
+        ci_reason=tuple(edf_reasons),
+    )
