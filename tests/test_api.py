@@ -7,13 +7,18 @@ import sigmatau
 
 STATISTICS = [
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev",
+]
+OTHER_NAMES = [
+    "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
+    "power_law_noise", "mixed_noise", "confidence", "datasets", "filterchain", "generate", "noiseid",
 ]
 
 
 def test_public_names_are_exported():
     for name in STATISTICS + ["StabilityResult", "SigmaTauError", "ParameterError", "DataError",
                               "SigmaTauWarning", "RangeWarning", "frequency_to_phase",
-                              "phase_to_frequency", "__version__"]:
+                              "phase_to_frequency", "__version__"] + OTHER_NAMES:
         assert name in sigmatau.__all__, name
         assert hasattr(sigmatau, name), name
 
@@ -27,6 +32,7 @@ def test_statistics_share_one_signature():
     import inspect
 
     expected = ["data", "rate", "data_type", "taus", "m", "points_per_decade"]
+    uncertainty = {"alpha", "confidence", "ci"}
     for name in STATISTICS:
         params = inspect.signature(getattr(sigmatau, name)).parameters
         assert list(params)[: len(expected)] == expected, name
@@ -34,6 +40,8 @@ def test_statistics_share_one_signature():
         assert params["data_type"].default == "freq"
         assert params["taus"].default == "octave"
         assert all(p.kind is p.KEYWORD_ONLY for p in list(params.values())[1:]), name
+        assert uncertainty <= set(params), name
+        assert params["ci"].default == "chi2" and params["alpha"].default is None
 
 
 def test_error_hierarchy():

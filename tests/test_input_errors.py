@@ -19,7 +19,8 @@ from sigmatau import DataError, ParameterError, SigmaTauError
 
 # Every public statistic function. Extend this list when a statistic is added;
 # test_statistics_list_is_complete fails until then.
-STATISTICS = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "stdev", "ostdev"]
+STATISTICS = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "stdev", "ostdev",
+              "totdev", "mtotdev", "ttotdev", "htotdev"]
 
 
 def _statistic(name):

@@ -1,24 +1,38 @@
 """sigmatau: noise analysis of sensors with the Allan family of variances.
 
-The public API is re-exported here explicitly; see ``__all__``.
+The public API is re-exported here explicitly; see ``__all__``. Submodules
+``noiseid``, ``confidence``, ``generate``, ``filterchain`` and ``datasets`` hold
+the rest of the toolkit.
 """
 
 from __future__ import annotations
 
+from . import confidence, datasets, filterchain, generate, noiseid
 from ._input import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .allan import adev, mdev, oadev, ostdev, stdev, tdev
+from .confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
+from .generate import mixed_noise, power_law_noise
 from .hadamard import hdev, ohdev
+from .noiseid import fit_power_law, identify, local_slopes
 from .result import StabilityResult
+from .total import htotdev, mtotdev, totdev, ttotdev
 
 __all__ = [
     "__version__",
     # statistics
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev",
+    # uncertainty and noise identification
+    "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
+    # noise generation
+    "power_law_noise", "mixed_noise",
     # types and errors
     "StabilityResult", "SigmaTauError", "ParameterError", "DataError",
     "SigmaTauWarning", "RangeWarning",
     # conversions
     "frequency_to_phase", "phase_to_frequency",
+    # submodules
+    "confidence", "datasets", "filterchain", "generate", "noiseid",
 ]
