@@ -7,9 +7,10 @@ import sigmatau
 
 STATISTICS = [
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
-    "totdev", "mtotdev", "ttotdev", "htotdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
 ]
 OTHER_NAMES = [
+    "theobr_kappa",
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     "power_law_noise", "mixed_noise", "confidence", "datasets", "filterchain", "generate", "noiseid",
 ]

@@ -17,13 +17,16 @@ from .generate import mixed_noise, power_law_noise
 from .hadamard import hdev, ohdev
 from .noiseid import fit_power_law, identify, local_slopes
 from .result import StabilityResult
+from .theo import theo1, theobr, theobr_kappa, theoh
+from .tie import mtie, tierms
 from .total import htotdev, mtotdev, totdev, ttotdev
 
 __all__ = [
     "__version__",
     # statistics
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
-    "totdev", "mtotdev", "ttotdev", "htotdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
+    "theobr_kappa",
     # uncertainty and noise identification
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     # noise generation

@@ -1,0 +1,389 @@
+"""Theo1, TheoBR and TheoH (sigmatau.theo).
+
+Sources (numerics.md, tests/data/allantools/README.md):
+
+* NBS 1000-point set, numerics.md §7.2: Theo1 at m = 10, 100, 1000 are Stable32
+  values quoted by allantools (4-5 digits) that numerics.md reproduced to 7
+  digits; κ = 1.085666 (n = 30) and the three TheoBR values were computed
+  independently (no published reference). Held to half a unit in the last
+  printed digit.
+* Stable32 Theo1 tables on PHASE.DAT with "Alpha = 0" (raw Theo1): five
+  significant digits, so the deviation is held to a relative 1e-4 and the
+  "Thêo1 #" column, (N−m)·m/2 printed with five digits, must be our count
+  rounded to those digits.
+* Not used: phasedat/phase_dat_theo1.txt. It is a run with "Alpha = 1" forced,
+  and every value equals raw Theo1 × 0.7764 (variance × 0.6028), a factor whose
+  origin is unexplained (numerics.md §3, §8 item 13). No factor is fitted to it.
+
+The fast Theo1 sums (lag sums over segments, and the incremental pass used for
+many factors) are held to the plain double sum of numerics.md §1.12, written
+below as the oracle.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from decimal import Decimal
+
+import numpy as np
+import pytest
+
+import refdata
+from sigmatau import theo
+from sigmatau.allan import oadev
+from sigmatau.datasets import nbs1000
+from sigmatau.errors import DataError, ParameterError, RangeWarning
+
+STABLE32_RTOL = 1e-4
+# Agreement required between any computation path and the plain sum.
+ORACLE_RTOL = 1e-9
+
+
+def assert_printed(value: float, printed: str) -> None:
+    """``value`` rounds to ``printed`` at the digits shown there."""
+    ref = float(printed)
+    half = 0.5 * 10.0 ** Decimal(printed).as_tuple().exponent
+    np.testing.assert_allclose(value, ref, rtol=half / abs(ref), atol=0.0)
+
+
+# --- the oracle: numerics.md §1.12, 0-based ---------------------------------------------
+
+
+def theo1_sum_plain(x: np.ndarray, m: int) -> float:
+    """Σ_{i=0}^{N-m-1} Σ_{δ=0}^{m/2-1} [(x_i − x_{i−δ+m/2}) + (x_{i+m} − x_{i+δ+m/2})]² / (m/2 − δ).
+
+    Vectorised over i only.
+    """
+    N = x.size
+    h = m // 2
+    i = np.arange(N - m)
+    total = 0.0
+    for delta in range(h):
+        t = (x[i] - x[i - delta + h]) + (x[i + m] - x[i + delta + h])
+        total += float(np.sum(t * t)) / (h - delta)
+    return total
+
+
+def theo1_var_plain(x: np.ndarray, m: int, tau0: float = 1.0) -> float:
+    return theo1_sum_plain(x, m) / (0.75 * (x.size - m) * (m * tau0) ** 2)
+
+
+def test_oracle_matches_scalar_loops():
+    # The oracle itself against the formula with both sums as Python loops.
+    x = np.random.default_rng(0).standard_normal(13)
+    for m in (2, 4, 6, 12):
+        h = m // 2
+        ref = 0.0
+        for i in range(x.size - m):
+            for d in range(h):
+                ref += ((x[i] - x[i - d + h]) + (x[i + m] - x[i + d + h])) ** 2 / (h - d)
+        assert theo1_sum_plain(x, m) == pytest.approx(ref, rel=1e-14)
+
+
+# --- test series: phase data of four characters ------------------------------------------
+
+
+def phase_series(kind: str, n: int, rng: np.random.Generator) -> np.ndarray:
+    """Phase of white PM, white FM (cumsum), random-walk FM (cumsum²) and blue PM (diff)."""
+    w = rng.standard_normal(n + 1)
+    if kind == "white":
+        return w[:n]
+    if kind == "cumsum":
+        return np.cumsum(w)[:n]
+    if kind == "cumsum2":
+        return np.cumsum(np.cumsum(w))[:n]
+    if kind == "diff":
+        return np.diff(w)
+    raise ValueError(kind)
+
+
+KINDS = ("white", "cumsum", "cumsum2", "diff")
+SIZES = (101, 256, 1009)  # odd prime, power of two, larger prime
+
+
+def factors(n: int) -> list[int]:
+    top = n - 1 if (n - 1) % 2 == 0 else n - 2
+    return sorted({m for m in (2, 4, 10, 16, 64, 100, 256, 500, n // 2 * 2 - 10, top) if 2 <= m <= top})
+
+
+@pytest.fixture(scope="module")
+def oracle_cases():
+    rng = np.random.default_rng(20240611)
+    cases = []
+    for n in SIZES:
+        for kind in KINDS:
+            x = phase_series(kind, n, rng)
+            x = x - np.linspace(x[0], x[-1], n)  # what the driver hands to the kernel
+            ms = factors(n)
+            cases.append((kind, n, x, np.array(ms), np.array([theo1_sum_plain(x, m) for m in ms])))
+    return cases
+
+
+def test_direct_sum_matches_oracle(oracle_cases):
+    for kind, n, x, ms, ref in oracle_cases:
+        got = np.array([theo._theo1_sum_direct(x, int(m)) for m in ms])
+        np.testing.assert_allclose(got, ref, rtol=1e-12, err_msg=f"{kind} N={n}")
+
+
+def test_fast_sum_matches_oracle(oracle_cases):
+    # The lag-sum form on its own (forced, even where the plain sum would be used):
+    # within ORACLE_RTOL on every kind, and within its own rounding-error estimate
+    # (the estimate that decides when theo1 falls back to the plain sum).
+    # Observed: ≤ 5e-13 (random-walk FM phase), ≤ 2e-14 otherwise.
+    for kind, n, x, ms, ref in oracle_cases:
+        for m, r in zip(ms, ref):
+            got, err = theo._theo1_sum_fast(x, int(m))
+            rel = abs(got - r) / r
+            assert rel <= ORACLE_RTOL, f"{kind} N={n} m={m}: {rel:.2e}"
+            assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
+
+
+def test_incremental_sums_match_oracle(oracle_cases):
+    # One pass over the record with global lag sums: digits are lost to cancellation
+    # on smooth phase at small m (up to 1e-7 here on random-walk FM); the error
+    # estimate flags those factors and the dispatcher recomputes them.
+    for kind, n, x, ms, ref in oracle_cases:
+        got, err = theo._theo1_sums_incremental(x, ms)
+        rel = np.abs(got - ref) / ref
+        assert np.all(rel <= np.maximum(err, 1e-13)), f"{kind} N={n}"
+        assert np.all(rel[err <= theo._FAST_RTOL] <= ORACLE_RTOL)
+
+
+def test_dispatched_sums_match_oracle(oracle_cases):
+    # What theo1 uses: per factor (plain or lag sums), or one incremental pass, with
+    # the plain sum wherever the fast forms could lose digits.
+    for kind, n, x, ms, ref in oracle_cases:
+        np.testing.assert_allclose(theo._theo1_sums(x, ms), ref, rtol=ORACLE_RTOL, err_msg=f"{kind} N={n}")
+        every = np.arange(2, n, 2)  # many factors: the incremental pass
+        ref_all = np.array([theo1_sum_plain(x, int(m)) for m in every[::7]])
+        np.testing.assert_allclose(theo._theo1_sums(x, every)[::7], ref_all, rtol=ORACLE_RTOL)
+
+
+def test_fast_paths_at_larger_n():
+    # Segmented lag sums (many segments) and a long incremental pass, N = 4099 (prime).
+    rng = np.random.default_rng(7)
+    for kind in KINDS:
+        x = phase_series(kind, 4099, rng)
+        x = x - np.linspace(x[0], x[-1], x.size)
+        for m in (300, 1024, 2000, 4098):
+            got, err = theo._theo1_sum_fast(x, m)
+            assert err <= theo._FAST_RTOL
+            assert got == pytest.approx(theo1_sum_plain(x, m), rel=ORACLE_RTOL)
+        ms = 12 + 4 * np.arange(4099 // 30 - 2)  # TheoBR's κ factors
+        got = theo._theo1_sums(x, ms)
+        for k in (0, 40, ms.size - 1):
+            assert got[k] == pytest.approx(theo1_sum_plain(x, int(ms[k])), rel=ORACLE_RTOL)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_public_theo1_with_large_trend(kind):
+    # theo1 on phase with a large offset and frequency offset against the oracle on
+    # the noise alone: Theo1 ignores a + b·i.
+    rng = np.random.default_rng(11)
+    n = 1009
+    x0 = phase_series(kind, n, rng)
+    scale = np.std(np.diff(x0))
+    trended = x0 + 1e3 * scale + 100.0 * scale * np.arange(n)
+    ms = np.array(factors(n))
+    r = theo.theo1(trended, data_type="phase", m=ms, rate=4.0)
+    ref = np.array([theo1_var_plain(x0, int(m), tau0=0.25) for m in ms])
+    np.testing.assert_allclose(r.var, ref, rtol=ORACLE_RTOL)
+    np.testing.assert_array_equal(r.n, (n - ms) * ms // 2)
+    np.testing.assert_allclose(r.taus, 0.75 * ms * 0.25)
+
+
+# --- NBS 1000-point set (numerics.md §7.2) --------------------------------------------------
+
+
+def test_nbs_theo1():
+    r = theo.theo1(nbs1000(), m=[10, 100, 1000])
+    for dev, printed in zip(r.dev, ("1.075740e-01", "3.178931e-02", "5.052400e-03")):
+        assert_printed(dev, printed)
+    np.testing.assert_array_equal(r.taus, [7.5, 75.0, 750.0])
+    np.testing.assert_array_equal(r.n, [4955, 45050, 500])
+
+
+def test_nbs_theobr():
+    k = theo.theobr_kappa(nbs1000())
+    assert_printed(k.kappa, "1.085666")
+    assert (k.n, k.n_points) == (30, 1001)
+    r = theo.theobr(nbs1000(), m=[10, 100, 1000])
+    for dev, printed in zip(r.dev, ("1.120871e-01", "3.312297e-02", "5.264364e-03")):
+        assert_printed(dev, printed)
+    assert r.statistic == "theobr"
+    assert r.bias == "theobr kappa=1.085666 (n=30)"
+    np.testing.assert_allclose(r.bias_factor, 1.0 / k.kappa)
+    np.testing.assert_allclose(r.var, k.kappa * theo.theo1(nbs1000(), m=[10, 100, 1000]).var, rtol=1e-15)
+
+
+def test_kappa_from_its_definition():
+    # κ = mean over i = 0…n of OAVAR(9+3i)/Theo1(12+4i), with the plain Theo1 sum.
+    y = np.random.default_rng(3).standard_normal(200)
+    x = np.concatenate(([0.0], np.cumsum(y)))
+    n = x.size // 30 - 3
+    i = np.arange(n + 1)
+    ratios = oadev(x, data_type="phase", m=9 + 3 * i).var / [theo1_var_plain(x, int(m)) for m in 12 + 4 * i]
+    k = theo.theobr_kappa(x, data_type="phase")
+    assert k.n == n == 3
+    assert k.kappa == pytest.approx(float(np.mean(ratios)), rel=1e-12)
+    # The same κ from frequency data, at any rate.
+    assert theo.theobr_kappa(y, rate=50.0).kappa == pytest.approx(k.kappa, rel=1e-12)
+
+
+# --- Stable32 tables on PHASE.DAT ------------------------------------------------------------
+
+
+def _rounds_to(count: np.ndarray, printed: np.ndarray) -> np.ndarray:
+    """Whether each integer rounds to the 5-significant-digit value printed by Stable32."""
+    half = 0.5 * 10.0 ** (np.floor(np.log10(count)) - 4)
+    return np.abs(count - printed) <= half
+
+
+@pytest.mark.parametrize("table", ["phase_dat_theo1_alpha0.txt", "phase_dat_theo1_alpha0_decade.txt"])
+def test_stable32_theo1(table):
+    t = refdata.load_table(f"phasedat/{table}")
+    r = theo.theo1(refdata.phase_dat(), data_type="phase", m=t.af)
+    np.testing.assert_allclose(r.dev, t.sigma, rtol=STABLE32_RTOL)
+    np.testing.assert_allclose(r.taus, t.tau, rtol=1e-12)
+    assert np.all(_rounds_to(r.n, t.n)), r.n[~_rounds_to(r.n, t.n)]
+
+
+# --- properties -----------------------------------------------------------------------------
+
+
+def test_frequency_and_phase_input_agree():
+    y = np.random.default_rng(5).standard_normal(300)
+    x = np.concatenate(([0.0], np.cumsum(y))) / 8.0
+    a = theo.theo1(y, rate=8.0, taus="all")
+    b = theo.theo1(x, rate=8.0, data_type="phase", taus="all")
+    np.testing.assert_allclose(a.var, b.var, rtol=1e-10)
+    np.testing.assert_array_equal(a.m, np.arange(2, 301, 2))
+
+
+def test_scaling():
+    y = np.random.default_rng(6).standard_normal(500)
+    a = theo.theo1(y)
+    b = theo.theo1(1e-6 * y)
+    np.testing.assert_allclose(b.var, 1e-12 * a.var, rtol=1e-12)
+
+
+def test_grids():
+    r = theo.theo1(nbs1000())
+    np.testing.assert_array_equal(r.m, [2, 4, 8, 16, 32, 64, 128, 256, 512])
+    r = theo.theo1(nbs1000(), taus="decade")
+    np.testing.assert_array_equal(r.m, [2, 4, 10, 20, 40, 100, 200, 400, 1000])
+    # τ in seconds are rounded to multiples of 1.5 τ0.
+    r = theo.theo1(nbs1000(), taus=[7.5, 75.0])
+    np.testing.assert_array_equal(r.m, [10, 100])
+
+
+def test_constant_data():
+    r = theo.theo1(np.full(200, 3.0))
+    assert np.all(r.var == 0.0)
+
+
+# --- errors ----------------------------------------------------------------------------------
+
+
+def test_odd_factor_rejected():
+    with pytest.raises(ParameterError, match="even"):
+        theo.theo1(nbs1000(), m=[10, 11])
+    with pytest.raises(ParameterError, match="even"):
+        theo.theobr(nbs1000(), m=5)
+
+
+def test_factor_range():
+    with pytest.raises(ParameterError, match="outside"):
+        theo.theo1(np.ones(20), m=22)  # N = 21 phase points: m ≤ 20
+    with pytest.raises(ParameterError, match="outside"):
+        theo.theo1(np.ones(20), m=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        theo.theo1(np.random.default_rng(1).standard_normal(20), m=20)
+
+
+def test_theobr_needs_90_phase_points():
+    rng = np.random.default_rng(2)
+    with pytest.raises(DataError, match="at least 90 phase points"):
+        theo.theobr(rng.standard_normal(88))  # 89 phase points
+    with pytest.raises(DataError, match="at least 90 phase points"):
+        theo.theobr_kappa(rng.standard_normal(89), data_type="phase")
+    with pytest.raises(DataError, match="at least 90 phase points"):
+        theo.theoh(rng.standard_normal(50))
+    k = theo.theobr_kappa(rng.standard_normal(89))  # 90 phase points: n = 0
+    assert k.n == 0
+
+
+def test_theobr_constant_data():
+    # Constant frequency: every variance is zero, so TheoBR is zero whatever κ.
+    for f in (theo.theobr, theo.theoh):
+        r = f(np.full(120, 2.0))
+        np.testing.assert_array_equal(r.dev, 0.0)
+    assert theo.theobr_kappa(np.full(120, 2.0)).kappa == 1.0
+
+
+def test_theoh_factor_errors():
+    with pytest.raises(ParameterError, match="between"):
+        theo.theoh(nbs1000(), m=[10, 120])  # 120: past AVAR (m < 100), below TheoBR (m ≥ 134)
+    with pytest.raises(ParameterError, match="even"):
+        theo.theoh(nbs1000(), m=[10, 135])
+    with pytest.raises(ParameterError, match="not both"):
+        theo.theoh(nbs1000(), m=[10], taus="decade")
+
+
+# --- TheoH ------------------------------------------------------------------------------------
+
+
+def test_theoh_split():
+    assert theo.theoh_split(1001) == (100, 134)
+    assert theo.theoh_split(90) == (8, 12)
+    for n in range(90, 400):
+        k, m_lo = theo.theoh_split(n)
+        assert m_lo % 2 == 0 and 0.75 * m_lo >= k > 0.75 * (m_lo - 2)
+
+
+def test_theoh_nbs(monkeypatch):
+    calls = []
+    original = theo._kappa
+    monkeypatch.setattr(theo, "_kappa", lambda x: calls.append(1) or original(x))
+    y = nbs1000()
+    r = theo.theoh(y)
+    assert len(calls) == 1  # κ once for the whole record
+    assert r.statistic == "theoh"
+    np.testing.assert_array_equal(r.m, [1, 2, 4, 8, 16, 32, 64, 170, 342, 682])
+    np.testing.assert_allclose(r.taus, [1, 2, 4, 8, 16, 32, 64, 127.5, 256.5, 511.5])
+    assert np.all(np.diff(r.taus) > 0)
+    avar = r.taus < 100.0
+    a = oadev(y, m=r.m[avar])
+    b = theo.theobr(y, m=r.m[~avar])
+    np.testing.assert_allclose(r.var[avar], a.var, rtol=1e-14)
+    np.testing.assert_allclose(r.var[~avar], b.var, rtol=1e-14)
+    np.testing.assert_array_equal(r.n, np.concatenate((a.n, b.n)))
+    np.testing.assert_allclose(r.bias_factor, np.where(avar, 1.0, 1.0 / 1.085666), rtol=1e-6)
+    assert r.bias.startswith("theoh: oavar for tau < 100 s (m < 100); theobr kappa=1.085666 (n=30)")
+
+
+def test_theoh_explicit_factors_and_taus():
+    y = nbs1000()
+    r = theo.theoh(y, m=[1, 10, 99, 134, 1000])
+    np.testing.assert_allclose(r.taus, [1, 10, 99, 100.5, 750])
+    r2 = theo.theoh(y, taus=[1.0, 10.0, 99.0, 100.5, 750.0])
+    np.testing.assert_array_equal(r2.m, r.m)
+    np.testing.assert_allclose(r2.var, r.var, rtol=1e-15)
+    with pytest.warns(RangeWarning, match="rounded"):
+        r3 = theo.theoh(y, taus=[100.0, 300.0])  # TheoBR τ are multiples of 1.5 s
+    np.testing.assert_array_equal(r3.m, [134, 400])
+    # rate: τ in seconds, factors unchanged
+    r4 = theo.theoh(y, rate=10.0, m=[1, 10, 99, 134, 1000])
+    np.testing.assert_allclose(r4.taus, r.taus / 10.0)
+
+
+def test_timing_octave_is_fast():
+    # A budget, not a benchmark: 10^4 points, octave grid.
+    import time
+
+    y = np.random.default_rng(9).standard_normal(10_000)
+    t = time.perf_counter()
+    theo.theo1(y)
+    assert time.perf_counter() - t < 10.0
