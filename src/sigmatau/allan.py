@@ -12,6 +12,7 @@ from typing import Optional
 import numpy as np
 
 from ._driver import Statistic, run
+from ._numeric import block_means, sumsq, window_sums
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .confidence import ONE_SIGMA
@@ -94,7 +95,7 @@ def _avar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     for i, m in enumerate(ms):
         xs = x[: ((x.size - 1) // m) * m + 1 : m]
         d2 = xs[2:] - 2.0 * xs[1:-1] + xs[:-2]
-        var[i] = np.dot(d2, d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
         n[i] = d2.size
     return var, n
 
@@ -104,7 +105,7 @@ def _oavar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         d2 = x[2 * m :] - 2.0 * x[m:-m] + x[: -2 * m]
-        var[i] = np.dot(d2, d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
         n[i] = d2.size
     return var, n
 
@@ -126,7 +127,7 @@ def _mvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         s = _mvar_sums(x, int(m))
-        var[i] = np.dot(s, s) / (2.0 * m**2 * (m * tau0) ** 2 * s.size)
+        var[i] = sumsq(s) / (2.0 * m**2 * (m * tau0) ** 2 * s.size)
         n[i] = s.size
     return var, n
 
@@ -138,26 +139,6 @@ def _tvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
 
 # --- kernels on frequency samples y (mean removed): no integration, so no phase
 # round-off; each is algebraically identical to its phase kernel above. ----------
-
-
-def window_sums(v: np.ndarray, m: int) -> np.ndarray:
-    """Sums of ``m`` consecutive values of ``v`` (``v.size - m + 1`` of them), in O(N).
-
-    ``v`` is always a difference series here, so its running sum stays of the
-    order of a few window sums and the subtraction loses no significant digits.
-    """
-    if m == 1:
-        return v.copy()
-    c = np.empty(v.size + 1)
-    c[0] = 0.0
-    np.cumsum(v, out=c[1:])
-    return c[m:] - c[:-m]
-
-
-def block_means(y: np.ndarray, m: int) -> np.ndarray:
-    """Means of the ``⌊M/m⌋`` non-overlapped blocks of ``m`` samples starting at 0."""
-    k = y.size // m
-    return y[: k * m].reshape(k, m).mean(axis=1)
 
 
 def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
@@ -175,7 +156,7 @@ def _avar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         d = np.diff(block_means(y, int(m)))
-        var[i] = np.dot(d, d) / (2.0 * d.size)
+        var[i] = sumsq(d) / (2.0 * d.size)
         n[i] = d.size
     return var, n
 
@@ -190,7 +171,7 @@ def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         s = _oavar_sums(y, int(m))
-        var[i] = np.dot(s, s) / (2.0 * m**2 * s.size)
+        var[i] = sumsq(s) / (2.0 * m**2 * s.size)
         n[i] = s.size
     return var, n
 
@@ -200,7 +181,7 @@ def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         t = window_sums(_oavar_sums(y, int(m)), int(m))
-        var[i] = np.dot(t, t) / (2.0 * float(m) ** 4 * t.size)
+        var[i] = sumsq(t) / (2.0 * float(m) ** 4 * t.size)
         n[i] = t.size
     return var, n
 

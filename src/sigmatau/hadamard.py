@@ -14,7 +14,8 @@ from ._driver import Statistic, run
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .confidence import ONE_SIGMA
-from .allan import _doc, block_means, window_sums
+from ._numeric import block_means, sumsq, window_sums
+from .allan import _doc
 from .result import StabilityResult
 
 __all__ = ["hdev", "ohdev"]
@@ -26,7 +27,7 @@ def _hvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     for i, m in enumerate(ms):
         xs = x[: ((x.size - 1) // m) * m + 1 : m]
         d3 = xs[3:] - 3.0 * xs[2:-1] + 3.0 * xs[1:-2] - xs[:-3]
-        var[i] = np.dot(d3, d3) / (6.0 * (m * tau0) ** 2 * d3.size)
+        var[i] = sumsq(d3) / (6.0 * (m * tau0) ** 2 * d3.size)
         n[i] = d3.size
     return var, n
 
@@ -36,7 +37,7 @@ def _ohvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         d3 = x[3 * m :] - 3.0 * x[2 * m : -m] + 3.0 * x[m : -2 * m] - x[: -3 * m]
-        var[i] = np.dot(d3, d3) / (6.0 * (m * tau0) ** 2 * d3.size)
+        var[i] = sumsq(d3) / (6.0 * (m * tau0) ** 2 * d3.size)
         n[i] = d3.size
     return var, n
 
@@ -47,7 +48,7 @@ def _hvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     for i, m in enumerate(ms):
         b = block_means(y, int(m))
         d = b[2:] - 2.0 * b[1:-1] + b[:-2]
-        var[i] = np.dot(d, d) / (6.0 * d.size)
+        var[i] = sumsq(d) / (6.0 * d.size)
         n[i] = d.size
     return var, n
 
@@ -58,7 +59,7 @@ def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         s = window_sums(y[2 * m :] - 2.0 * y[m:-m] + y[: -2 * m], int(m))
-        var[i] = np.dot(s, s) / (6.0 * m**2 * s.size)
+        var[i] = sumsq(s) / (6.0 * m**2 * s.size)
         n[i] = s.size
     return var, n
 

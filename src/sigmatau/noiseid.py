@@ -27,6 +27,7 @@ import numpy as np
 from scipy.optimize import brentq, nnls
 
 from ._input import as_series, check_data_type, check_rate
+from ._numeric import block_means, dot, sumsq
 from .allan import mdev, oadev
 from .errors import DataError, ParameterError, RangeWarning
 from .result import StabilityResult
@@ -102,11 +103,6 @@ def _frequency(data: np.ndarray, data_type: str) -> np.ndarray:
     return np.diff(data) if data_type == "phase" else data
 
 
-def _block_means(y: np.ndarray, m: int) -> np.ndarray:
-    k = y.size // m
-    return y[: k * m].reshape(k, m).mean(axis=1)
-
-
 # ------------------------------------------------------------------ lag-1 ACF (§5.2)
 
 
@@ -140,11 +136,10 @@ class Lag1Result:
 
 def _lag1_r1(z: np.ndarray, acf: str = "standard") -> float:
     zc = z - z.mean()
-    # einsum rather than np.dot: no BLAS threads, which stall on a busy machine
-    den = float(np.einsum("i,i->", zc, zc))
+    den = sumsq(zc)
     if den == 0.0:
         raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
-    r1 = float(np.einsum("i,i->", zc[:-1], zc[1:])) / den
+    r1 = dot(zc[:-1], zc[1:]) / den
     return r1 * (z.size - 1) / z.size if acf == "stable32" else r1
 
 
@@ -248,7 +243,7 @@ def lag1_acf_noise_id(
         raise ParameterError(f"min_points={min_points!r} must be at least 3")
     if detrend and series.size > 3:
         series = _detrend(series, dtype)
-    z = series[::m] if dtype == "phase" else _block_means(series, m)
+    z = series[::m] if dtype == "phase" else block_means(series, m)
     n = int(z.size)
     if n < min_points:
         raise InsufficientDataError(
@@ -360,7 +355,7 @@ def b1_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
 
 
 def _b1_obs(y: np.ndarray, m: int) -> tuple[float, int]:
-    means = _block_means(y, m)
+    means = block_means(y, m)
     nb = int(means.size)
     if nb < 2:
         raise InsufficientDataError(f"the B1 ratio needs at least 2 averages at m={m}, got {nb}")

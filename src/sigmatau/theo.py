@@ -20,6 +20,7 @@ import numpy as np
 from scipy import fft as _fft
 
 from ._driver import Statistic, finish, prepare, run
+from ._numeric import dot
 from ._input import DataType
 from ._uncertainty import CiMethod, check_options
 from .allan import _doc, _oavar_kernel
@@ -80,7 +81,7 @@ def _theo1_sum_direct(x: np.ndarray, m: int) -> float:
     for L in range(1, m // 2 + 1):
         np.subtract(x[L:], x[:-L], out=d[: N - L])
         np.subtract(d[m - L : m - L + K], d[:K], out=e)
-        total += _dot(e, e) / L
+        total += dot(e, e) / L
     return total
 
 
@@ -164,7 +165,7 @@ def _fft_sums(X: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
     K = n - m
     t = np.arange(n) - 0.5 * (n - 1)
     X = X - X.mean(axis=1, keepdims=True)
-    X = X - np.outer(np.einsum("ri,i->r", X, t) / np.dot(t, t), t)
+    X = X - np.outer(np.einsum("ri,i->r", X, t) / dot(t, t), t)
     # Lags up to m only: n + m points of padding keep the circular correlations exact.
     nfft = _fft.next_fast_len(n + m, real=True)
     Xf = _fft.rfft(X, nfft, axis=1)
@@ -230,7 +231,7 @@ def _theo1_sums_incremental(x: np.ndarray, ms: np.ndarray) -> tuple[np.ndarray, 
     N = x.size
     t = np.arange(N) - 0.5 * (N - 1)
     x = x - x.mean()
-    x = x - (_dot(x, t) / _dot(t, t)) * t
+    x = x - (dot(x, t) / dot(t, t)) * t
     hs = np.asarray(ms, dtype=np.int64) // 2
     h_max = int(hs.max())
     wanted = np.zeros(h_max + 1, dtype=bool)
@@ -278,20 +279,15 @@ def _theo1_sums_incremental(x: np.ndarray, ms: np.ndarray) -> tuple[np.ndarray, 
         psi[h - 1] = 2.0 / h
         # Σ_c (x_{c-h} + x_{c+h})²: the lag-m products cover the whole lag-m autocorrelation.
         alpha = q[N - m] + (q[N] - q[m]) + 2.0 * R[m]
-        beta = 2.0 * _dot(w, R[h:0:-1] + R[h : 2 * h]) - _dot(psi, zf[1 : 2 * h] + zr[1 : 2 * h])
+        beta = 2.0 * dot(w, R[h:0:-1] + R[h : 2 * h]) - dot(psi, zf[1 : 2 * h] + zr[1 : 2 * h])
         squares = (q[N - h : N - 2 * h : -1] - q[h:0:-1]) + (q[N - h : N] - q[h : 2 * h])
-        sums[m] = harmonic * alpha - 2.0 * beta + _dot(w, squares + 2.0 * G[:h])
+        sums[m] = harmonic * alpha - 2.0 * beta + dot(w, squares + 2.0 * G[:h])
     total = np.array([sums[int(m)] for m in ms])
     scale = np.array([_harmonic(int(m) // 2) for m in ms]) * q[-1]
     eps = np.finfo(float).eps
     with np.errstate(divide="ignore", invalid="ignore"):
         err = np.where(total > 0.0, _FAST_ERR_UNITS * eps * scale / total, np.where(scale == 0.0, 0.0, np.inf))
     return total, err
-
-
-def _dot(a: np.ndarray, b: np.ndarray) -> float:
-    # einsum rather than BLAS: a threaded ddot is many times slower on a busy machine.
-    return float(np.einsum("i,i->", a, b))
 
 
 def _harmonic(h: int) -> float:

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from ._driver import Statistic, finish, run
+from ._numeric import sumsq
 from ._uncertainty import CiMethod, check_options
 from .confidence import ONE_SIGMA
 from ._input import DataType
@@ -77,12 +78,6 @@ def _doc_total(func):
 # --- kernels: (phase x, factors, τ0) -> (variance, number of terms) ---------------
 
 
-def _sumsq(v: np.ndarray) -> float:
-    # einsum rather than np.dot: a threaded BLAS dot was 10-40x slower on a
-    # loaded machine for the vector sizes met here.
-    return float(np.einsum("i,i->", v, v))
-
-
 def _totvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray]:
     n_pts = x.size
     # Doubly reflected phase x*_{-j} = 2x_0 - x_j, x*_{N-1+j} = 2x_{N-1} - x_{N-1-j},
@@ -93,7 +88,7 @@ def _totvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarr
     var = np.empty(ms.size)
     for i, m in enumerate(ms):
         d2 = ext[c + 1 - m : c + n_pts - 1 - m] - 2.0 * ext[c + 1 : c + n_pts - 1] + ext[c + 1 + m : c + n_pts - 1 + m]
-        var[i] = _sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
     return var, np.full(ms.size, n_pts - 2, dtype=np.int64)
 
 
@@ -159,35 +154,35 @@ def _tot_sums(u: np.ndarray, m: int, block: Optional[int] = None) -> tuple[float
         q *= 3.0
         q += f0
         q += r0
-        total += _sumsq(flat)
+        total += sumsq(flat)
         np.add(f0, r2, out=q)
         q *= -3.0
         q += f1
         q += r1
-        total += _sumsq(flat)
+        total += sumsq(flat)
         np.subtract(f0, f1, out=q)
         q *= 3.0
         q += f2
         q += r2
-        total += _sumsq(flat)
+        total += sumsq(flat)
         np.subtract(f1, f2, out=q)
         q *= 3.0
         q -= f0
         q -= r0
         q += 2.0 * t
-        total += _sumsq(flat)
+        total += sumsq(flat)
         np.add(r0, f2, out=q)
         q *= 3.0
         q -= f1
         q -= r1
         q -= 4.0 * t
-        total += _sumsq(flat)
+        total += sumsq(flat)
         np.subtract(r1, r0, out=q)
         q *= 3.0
         q -= f2
         q -= r2
         q += 2.0 * t
-        total += _sumsq(flat)
+        total += sumsq(flat)
     return total / m**2, windows
 
 
