@@ -46,6 +46,7 @@ import numpy as np
 from scipy import fft as _fft
 
 from ._input import DataType, check_data_type, check_rate
+from ._powerlaw import response
 from .errors import ParameterError
 
 __all__ = [
@@ -82,7 +83,6 @@ _STATISTICS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev")
 #: plateau within 0.6 % from m ≈ 128 up to m = n/4, where the tip's bank alone
 #: falls 4 % below it.
 _TIP_EXTRA_ROWS = 4
-_EULER_GAMMA = 0.5772156649015329
 
 
 # --- validation ----------------------------------------------------------------------
@@ -574,40 +574,8 @@ def expected_variance(
     statistic = _check_statistic(statistic)
     rate = check_rate(rate)
     _check_converges(statistic, a)
-    fh, tau0 = rate / 2.0, 1.0 / rate
-    g, pi2 = _EULER_GAMMA, math.pi**2
-    ln2, ln3 = math.log(2.0), math.log(3.0)
-    if statistic in ("adev", "oadev"):
-        table = {
-            2: lambda t: 3.0 * fh / (4.0 * pi2 * t**2),
-            1: lambda t: (3.0 * g - ln2 + 3.0 * np.log(2.0 * math.pi * fh * t)) / (4.0 * pi2 * t**2),
-            0: lambda t: 1.0 / (2.0 * t),
-            -1: lambda t: np.full_like(t, 2.0 * ln2),
-            -2: lambda t: 2.0 * pi2 / 3.0 * t,
-        }
-    elif statistic in ("mdev", "tdev"):
-        table = {
-            2: lambda t: 3.0 * fh * tau0 / (4.0 * pi2 * t**3),
-            1: lambda t: 3.0 * math.log(256.0 / 27.0) / (8.0 * pi2 * t**2),
-            0: lambda t: 1.0 / (4.0 * t),
-            -1: lambda t: np.full_like(t, 27.0 / 8.0 * ln3 - 4.0 * ln2),
-            -2: lambda t: 11.0 * pi2 / 20.0 * t,
-        }
-    else:
-        table = {
-            2: lambda t: 5.0 * fh / (6.0 * pi2 * t**2),
-            1: lambda t: (10.0 * g - 6.0 * ln2 + ln3 + 10.0 * np.log(2.0 * math.pi * fh * t))
-            / (12.0 * pi2 * t**2),
-            0: lambda t: 1.0 / (2.0 * t),
-            -1: lambda t: np.full_like(t, 4.0 * ln2 - 1.5 * ln3),
-            -2: lambda t: pi2 / 3.0 * t,
-            -3: lambda t: pi2 / 6.0 * (27.0 * ln3 - 32.0 * ln2) * t**2,
-            -4: lambda t: 11.0 * pi2**2 / 15.0 * t**3,
-        }
-    var = h * table[a](tau)
-    if statistic == "tdev":
-        var = var * tau**2 / 3.0
-    return var
+    kind = {"adev": "avar", "oadev": "avar", "mdev": "mvar", "tdev": "tvar"}.get(statistic, "hvar")
+    return h * response(kind, a, tau, rate)
 
 
 def expected_avar(alpha: NoiseType, h: float, taus: object, *, rate: float = 1.0) -> np.ndarray:

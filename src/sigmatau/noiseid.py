@@ -28,6 +28,8 @@ from scipy.optimize import brentq, nnls
 
 from ._input import as_series, check_data_type, check_rate
 from ._numeric import block_means, dot, sumsq
+from ._powerlaw import EULER_GAMMA as _EULER_GAMMA
+from ._powerlaw import response
 from .allan import mdev, oadev
 from .errors import DataError, ParameterError, RangeWarning
 from .result import StabilityResult
@@ -60,7 +62,6 @@ NOISE_NAMES: Mapping[int, str] = {
 
 Family = Literal["allan", "modified", "hadamard", "total", "theo"]
 
-_EULER_GAMMA = 0.57721566490153286
 
 #: Fewest points the lag-1 method accepts (Riley & Greenhall; numerics.md §5.2).
 LAG1_MIN_POINTS = 30
@@ -992,42 +993,11 @@ _FIT_ALPHAS = {"avar": (2, 1, 0, -1, -2), "mvar": (2, 1, 0, -1, -2), "tvar": (2,
 
 def _response(kind: str, alpha: int, tau: np.ndarray, rate: float) -> np.ndarray:
     """Variance produced by S_y = 1·f^α (unit h_α); continuous model, f_h = rate/2."""
-    pi2 = math.pi**2
-    f_h = rate / 2.0
-    tau0 = 1.0 / rate
-    g, ln2, ln3 = _EULER_GAMMA, math.log(2.0), math.log(3.0)
-    if kind == "avar":
-        table = {
-            2: lambda t: 3.0 * f_h / (4.0 * pi2 * t**2),
-            1: lambda t: (3.0 * g - ln2 + 3.0 * np.log(2.0 * math.pi * f_h * t)) / (4.0 * pi2 * t**2),
-            0: lambda t: 1.0 / (2.0 * t),
-            -1: lambda t: np.full_like(t, 2.0 * ln2),
-            -2: lambda t: 2.0 * pi2 / 3.0 * t,
-        }
-    elif kind in ("mvar", "tvar"):
-        table = {
-            # exact for discrete white PM: 3σ_x²/(nτ²), σ_x² = h2 f_h/(4π²)
-            2: lambda t: 3.0 * f_h * tau0 / (4.0 * pi2 * t**3),
-            1: lambda t: 3.0 * math.log(256.0 / 27.0) / (8.0 * pi2 * t**2),
-            # exact for τ0-averaged white FM: h0/(4τ)·(1 + 1/m²) (→ AVAR at m = 1)
-            0: lambda t: (1.0 + (tau0 / t) ** 2) / (4.0 * t),
-            -1: lambda t: np.full_like(t, 27.0 / 8.0 * ln3 - 4.0 * ln2),
-            -2: lambda t: 11.0 * pi2 / 20.0 * t,
-        }
-    else:  # hvar
-        table = {
-            2: lambda t: 5.0 * f_h / (6.0 * pi2 * t**2),
-            1: lambda t: (10.0 * g - 6.0 * ln2 + ln3 + 10.0 * np.log(2.0 * math.pi * f_h * t)) / (12.0 * pi2 * t**2),
-            0: lambda t: 1.0 / (2.0 * t),
-            -1: lambda t: np.full_like(t, 4.0 * ln2 - 1.5 * ln3),
-            -2: lambda t: pi2 / 3.0 * t,
-            -3: lambda t: pi2 / 6.0 * (27.0 * ln3 - 32.0 * ln2) * t**2,
-            -4: lambda t: 11.0 * pi2**2 / 15.0 * t**3,
-        }
-    if alpha not in table:
-        raise ParameterError(f"alpha={alpha!r} is not supported by this statistic; allowed: {sorted(table)}")
-    out = table[alpha](tau)
-    return out * tau**2 / 3.0 if kind == "tvar" else out
+    try:
+        return response(kind, alpha, tau, rate, sampled=True)
+    except KeyError:
+        allowed = sorted(_FIT_ALPHAS[kind])
+        raise ParameterError(f"alpha={alpha!r} is not supported by this statistic; allowed: {allowed}") from None
 
 
 def power_law_variance(
