@@ -1,0 +1,65 @@
+"""Reading sensor logs: CSV/TSV/whitespace text, Stable32 data files, NumPy, ROS bags, HDF5, Parquet.
+
+:func:`read` turns a file into a :class:`SensorLog` — float64 channels grouped
+as gyro/accel/…, their units, the sample rate, the timestamps and a
+:class:`TimingReport` of jitter, gaps, duplicated and out-of-order samples and
+what was done about them. :func:`list_topics` lists the topics of a ROS bag.
+
+Formats (see :func:`formats`): ``csv``, ``stable32``, ``npy``, ``npz`` with
+NumPy only; ``rosbag1`` and ``rosbag2`` (sqlite3 and MCAP) need the extra
+``ros`` (package ``rosbags``), ``hdf5`` the extra ``hdf5`` (``h5py``),
+``parquet`` the extra ``parquet`` (``pyarrow``); each is imported only when
+such a file is read.
+
+Errors are one line naming the file and the problem, from sigmatau's hierarchy:
+:class:`InputNotFoundError` (also a FileNotFoundError), :class:`FormatError`
+and the other :class:`~sigmatau.errors.DataError` cases, a
+:class:`~sigmatau.errors.ParameterError` for a bad argument or a column, topic or
+dataset that does not exist (listing those that do), and
+:class:`MissingDependencyError` naming the extra to install. The input is only
+ever read.
+
+Examples
+--------
+>>> import tempfile, pathlib, numpy as np
+>>> from sigmatau import io
+>>> folder = pathlib.Path(tempfile.mkdtemp())
+>>> t = 1_403_636_579_758_555_392 + 5_000_000 * np.arange(400)
+>>> rows = "\\n".join(f"{ti},0.001,-0.002,0.003,9.81,0.1,-0.2" for ti in t)
+>>> header = "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+>>> header += "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]"
+>>> _ = (folder / "data.csv").write_text(header + "\\n" + rows + "\\n")
+>>> log = io.read(folder / "data.csv")
+>>> log.names, log.rate, log.units["gyro_x"], log.timing.time_unit
+(('gyro_x', 'gyro_y', 'gyro_z', 'accel_x', 'accel_y', 'accel_z'), 200.0, 'rad/s', 'ns')
+"""
+
+from __future__ import annotations
+
+from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
+from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
+from ._read import MIN_SAMPLES, detect_format, list_topics, read
+from ._registry import formats
+from ._units import DEFAULT_UNITS, GROUP_UNITS, SI_UNITS, TIME_UNITS
+
+__all__ = [
+    "read",
+    "list_topics",
+    "formats",
+    "detect_format",
+    "SensorLog",
+    "TimingReport",
+    "Gap",
+    "Source",
+    "TopicInfo",
+    "FormatError",
+    "InputNotFoundError",
+    "MissingDependencyError",
+    "InputWarning",
+    "TimingWarning",
+    "DEFAULT_UNITS",
+    "GROUP_UNITS",
+    "SI_UNITS",
+    "TIME_UNITS",
+    "MIN_SAMPLES",
+]

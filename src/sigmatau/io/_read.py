@@ -1,0 +1,374 @@
+"""``read`` and ``list_topics``: validation, dispatch to a reader, then the shared steps."""
+
+from __future__ import annotations
+
+import os
+import warnings as _warnings
+from pathlib import Path
+from typing import Literal, Mapping, Sequence, Union
+
+import numpy as np
+
+from .._input import DataType, check_data_type, check_rate
+from ..errors import DataError, ParameterError, SigmaTauError
+from . import _hdf5, _numpy, _parquet, _ros, _text  # noqa: F401  (they register their readers)
+from ._columns import list_names, recognise
+from ._errors import FormatError, InputNotFoundError, InputWarning, TimingWarning
+from ._model import SensorLog, Source, TopicInfo
+from ._progress import Progress
+from ._registry import Options, Table, detect, get
+from ._timing import check_times, infer_time_unit, process, untimed
+from ._units import DEFAULT_UNITS, TIME_UNITS, declared_unit, time_unit_name
+
+__all__ = ["read", "list_topics", "detect_format", "MIN_SAMPLES"]
+
+#: Fewest samples a log may have (an Allan variance at τ0 needs 3 phase points).
+MIN_SAMPLES = 3
+
+PathLike = Union[str, "os.PathLike[str]"]
+ColumnSpec = Union[str, int, Sequence[Union[str, int]], None]
+
+_GAPS = ("refuse", "split", "ignore")
+_UNSORTED = ("sort", "refuse")
+_DUPLICATES = ("drop", "refuse")
+_STAMPS = ("header", "bag")
+_FORMAT_OPTIONS = {
+    "topic": ("rosbag1", "rosbag2"),
+    "stamps": ("rosbag1", "rosbag2"),
+    "dataset": ("hdf5",),
+    "delimiter": ("csv", "stable32"),
+}
+
+
+def _choice(name: str, value: object, allowed: tuple) -> None:
+    if value not in allowed:
+        raise ParameterError(f"{name}={value!r} must be one of {allowed}")
+
+
+def _resolve(path: object) -> tuple[Path, str]:
+    if not isinstance(path, (str, os.PathLike)):
+        raise ParameterError(f"path={path!r} must be a file name (str or path-like)")
+    display = os.fspath(path)
+    if not display:
+        raise ParameterError("path='' names no file")
+    p = Path(display)
+    if not p.exists():
+        raise InputNotFoundError(f"{display}: no such file or directory")
+    if p.is_file() and p.stat().st_size == 0:
+        raise DataError(f"{display}: the file is empty")
+    return p, display
+
+
+def _options(**kw: object) -> Options:
+    if kw["format"] is not None:
+        get(kw["format"])
+    _choice("gaps", kw["gaps"], _GAPS)
+    _choice("unsorted", kw["unsorted"], _UNSORTED)
+    _choice("duplicates", kw["duplicates"], _DUPLICATES)
+    if kw["stamps"] is not None:
+        _choice("stamps", kw["stamps"], _STAMPS)
+    if kw["rate"] is not None:
+        kw["rate"] = check_rate(kw["rate"])
+    if kw["time_unit"] is not None:
+        unit = time_unit_name(kw["time_unit"]) if isinstance(kw["time_unit"], str) else None
+        if unit is None:
+            raise ParameterError(f"time_unit={kw['time_unit']!r} must be one of {tuple(TIME_UNITS)}")
+        kw["time_unit"] = unit
+    if kw["data_type"] is not None:
+        check_data_type(kw["data_type"])
+    units = kw["units"]
+    if units is not None and (not isinstance(units, Mapping) or not all(isinstance(k, str) for k in units)):
+        raise ParameterError(f"units={units!r} must map group or channel names to unit strings")
+    threshold = kw["gap_threshold"]
+    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not threshold > 1:
+        raise ParameterError(f"gap_threshold={threshold!r} must be a number > 1 (in median steps)")
+    kw["gap_threshold"] = float(threshold)
+    if kw["time_column"] is True:
+        raise ParameterError("time_column=True is not a column; pass a name, an index, None (detect) or False")
+    for flag in ("allow_nan",):
+        if not isinstance(kw[flag], bool):
+            raise ParameterError(f"{flag}={kw[flag]!r} must be True or False")
+    if kw["progress"] is not None and not isinstance(kw["progress"], bool):
+        raise ParameterError(f"progress={kw['progress']!r} must be True, False or None (when a terminal)")
+    kw.pop("progress")
+    return Options(**kw)  # type: ignore[arg-type]
+
+
+def detect_format(path: PathLike) -> str:
+    """The format :func:`read` would use for ``path`` ("csv" covers Stable32-style text too)."""
+    p, display = _resolve(path)
+    return detect(p, display)[0]
+
+
+def read(
+    path: PathLike,
+    *,
+    format: str | None = None,
+    columns: ColumnSpec = None,
+    time_column: str | int | Literal[False] | None = None,
+    time_unit: str | None = None,
+    rate: float | None = None,
+    data_type: DataType | None = None,
+    units: Mapping[str, str] | None = None,
+    topic: str | None = None,
+    dataset: str | None = None,
+    stamps: Literal["header", "bag"] | None = None,
+    gaps: Literal["refuse", "split", "ignore"] = "refuse",
+    gap_threshold: float = 1.5,
+    unsorted: Literal["sort", "refuse"] = "sort",
+    duplicates: Literal["drop", "refuse"] = "drop",
+    allow_nan: bool = False,
+    delimiter: str | None = None,
+    progress: bool | None = None,
+) -> SensorLog:
+    """Read a sensor log into a :class:`SensorLog`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        A file, or a ROS 2 bag directory. The file is only read, never changed.
+    format : str, optional
+        Reader name (see :func:`formats`); detected from the content and the
+        extension when None. Text files whose only numeric column is one value
+        per line (or MJD and value) are read as Stable32 data files.
+    columns : str, int or sequence of them, optional
+        Channels by column name or 0-based index (ROS bags: ``gyro_x`` …
+        ``accel_z``). Names match exactly, then ignoring case and a unit in
+        brackets, then by canonical channel name. None: every numeric column
+        but the time column — only the recognised IMU channels when there are any.
+    time_column : str, int or False, optional
+        The timestamp column. None looks for one by name (t, time, timestamp,
+        ``#timestamp [ns]``, ``field.header.stamp``, mjd …); False: none.
+    time_unit : {"s", "ms", "us", "ns", "min", "h", "d"}, optional
+        Unit of the time column. When None it is taken from the column name
+        (``[ns]``, ``_ms`` …), then from the magnitude (Unix time between 1990
+        and 2100 in exactly one unit), then from the median step (exactly one
+        unit giving 1 µHz–40 kHz); the read is refused when that is ambiguous.
+    rate : float, optional
+        Sample rate in Hz. Needed when there are no timestamps; with timestamps
+        it overrides the measured rate (a TimingWarning says when they disagree
+        by more than 1 %).
+    data_type : {"freq", "phase"}, optional
+        Default "freq" (sensor output); Stable32 files: from "phase"/"frequency"
+        in their header or name, else this is required.
+    units : mapping, optional
+        Units by group ("gyro", "accel", …) or channel, such as
+        ``{"gyro": "deg/s", "accel": "g"}``. Gyro and accel units are checked
+        (rad/s, mrad/s, deg/s, mdeg/s, deg/h; m/s^2, mm/s^2, g, mg, ug), recorded
+        in these ASCII spellings (``°/s``, ``dps``, ``m/s²``, ``µg`` … are accepted).
+        Without a declaration, the file's (EuRoC header, ROS message) or the
+        default: gyro rad/s, accel m/s^2 (``unit_origin`` says which).
+    topic : str, optional
+        ROS bags: the ``sensor_msgs/msg/Imu`` topic; needed when there are several.
+    dataset : str, optional
+        HDF5: path of the dataset or group to read.
+    stamps : {"header", "bag"}, optional
+        ROS bags: message ``header.stamp`` (default) or the bag's receive time.
+    gaps : {"refuse", "split", "ignore"}
+        Steps longer than ``gap_threshold`` median steps: refuse (error naming
+        where), keep and let :meth:`SensorLog.segments` split, or ignore.
+    gap_threshold : float
+        In median steps, > 1 (default 1.5: one missing sample is a gap).
+    unsorted : {"sort", "refuse"}
+        Timestamps going backwards: sort the samples (with a TimingWarning) or refuse.
+    duplicates : {"drop", "refuse"}
+        Repeated timestamps: keep the first sample of each (with a TimingWarning) or refuse.
+    allow_nan : bool
+        Keep NaN/inf samples (refused by default).
+    delimiter : str, optional
+        Text files: the field delimiter (detected when None).
+    progress : bool, optional
+        Progress bar on stderr: None (default) when stderr is a terminal.
+
+    Returns
+    -------
+    SensorLog
+
+    Raises
+    ------
+    InputNotFoundError
+        The path does not exist.
+    FormatError
+        The file is not readable as its format (unrecognised, corrupt, truncated).
+    DataError
+        No numeric data, too few samples, NaN, timing refused by a policy.
+    ParameterError
+        A bad argument, or a column, topic or dataset that does not exist (the
+        message lists the ones that do).
+    MissingDependencyError
+        The format needs an optional package (the message names the extra).
+    """
+    opts = _options(
+        format=format, columns=columns, time_column=time_column, time_unit=time_unit, rate=rate,
+        data_type=data_type, units=units, topic=topic, dataset=dataset, stamps=stamps, gaps=gaps,
+        gap_threshold=gap_threshold,
+        unsorted=unsorted, duplicates=duplicates, allow_nan=allow_nan, delimiter=delimiter,
+        progress=progress,
+    )
+    p, display = _resolve(path)
+    if format is None:
+        name, auto = detect(p, display)
+    else:
+        name, auto = format, False
+    spec = get(name)
+    for option, readers in _FORMAT_OPTIONS.items():
+        if getattr(opts, option) is not None and name not in readers:
+            raise ParameterError(
+                f"{option}= applies to {' and '.join(readers)} files only; {display} is read as {name}"
+            )
+    if name in ("rosbag1", "rosbag2") and opts.time_column is not None:
+        raise ParameterError("time_column= does not apply to ROS bags; use stamps='header' or 'bag'")
+    try:
+        with Progress(None, f"sigmatau: reading {p.name}", enabled=progress) as bar:
+            table = spec.func(p, display, opts, bar, auto=auto) if name == "csv" else spec.func(
+                p, display, opts, bar)
+    except (SigmaTauError, MemoryError, KeyboardInterrupt):
+        raise
+    except OSError as exc:
+        raise FormatError(f"{display}: cannot read: {exc.strerror or exc}") from None
+    messages: list[tuple[str, type[Warning]]] = []
+    log = _finish(table, opts, display, messages)
+    for text, category in messages:
+        _warnings.warn(text, category, stacklevel=2)
+    return log
+
+
+def _names_groups(table: Table) -> tuple[dict[str, str], dict[str, str]]:
+    """Channel name and group of each chosen column (canonical IMU names unless they collide)."""
+    proposed: dict[str, tuple[str, str]] = {}
+    for orig in table.data:
+        if orig in table.rename:
+            proposed[orig] = (table.rename[orig], table.groups.get(orig, "other"))
+        else:
+            rec = recognise(orig)
+            proposed[orig] = (rec.name or orig, table.groups.get(orig) or rec.group or "other")
+    counts: dict[str, int] = {}
+    for name, _ in proposed.values():
+        counts[name] = counts.get(name, 0) + 1
+    names = {o: (n if counts[n] == 1 else o) for o, (n, _) in proposed.items()}
+    groups = {o: g for o, (_, g) in proposed.items()}
+    return names, groups
+
+
+def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str, type[Warning]]]) -> SensorLog:
+    data = table.data
+    if not data or table.rows == 0:
+        raise DataError(f"{display}: no numeric data")
+    names, groups_of = _names_groups(table)
+    if not opts.allow_nan:
+        for orig, v in data.items():
+            bad = ~np.isfinite(v)
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
+                raise DataError(
+                    f"{display}: column {called} holds {int(bad.sum())} NaN/inf value(s) (first at sample {i});"
+                    " remove them or pass allow_nan=True"
+                )
+    channels = {names[o]: v for o, v in data.items()}
+    group_members: dict[str, list[str]] = {}
+    for o in data:
+        group_members.setdefault(groups_of[o], []).append(names[o])
+    order = ["gyro", "accel", "temperature", "phase", "freq"]
+    groups = {g: tuple(group_members[g]) for g in sorted(group_members, key=lambda g: (
+        order.index(g) if g in order else len(order), g))}
+
+    units: dict[str, str] = {}
+    origin: dict[str, str] = {}
+    for o in data:
+        if o in table.units and table.units[o]:
+            units[names[o]] = table.units[o]
+            origin[names[o]] = table.unit_origin
+    if opts.units:
+        by_original = {o: names[o] for o in data}
+        for key, text in opts.units.items():
+            if key in groups:
+                targets = [(n, key) for n in groups[key]]
+            elif key in channels:
+                targets = [(key, next(g for o, g in groups_of.items() if names[o] == key))]
+            elif key in by_original:
+                targets = [(by_original[key], groups_of[key])]
+            else:
+                raise ParameterError(
+                    f"units key {key!r} is neither a group ({', '.join(groups)}) nor a channel"
+                    f" ({', '.join(channels)}) of {display}"
+                )
+            for name, group in targets:
+                unit = declared_unit(group, text, key=key)
+                if name in units and units[name] != unit and origin.get(name) in ("file", "format"):
+                    messages.append((
+                        f"{display}: channel {name!r} is in {units[name]} according to the {origin[name]};"
+                        f" using the declared {unit}", InputWarning))
+                units[name] = unit
+                origin[name] = "declared"
+    for group, unit in DEFAULT_UNITS.items():
+        for name in groups.get(group, ()):
+            if name not in units:
+                units[name] = unit
+                origin[name] = "default"
+    for name in channels:
+        units.setdefault(name, "")
+        origin.setdefault(name, "")
+
+    warn_texts: list[str] = list(table.warnings)
+    rate = opts.rate if opts.rate is not None else table.rate
+    rate_source = "given" if opts.rate is not None else "file"
+    timestamps = None
+    time_origin = None
+    if table.time is not None:
+        assert table.time_name is not None
+        check_times(table.time, name=table.time_name, path=display)
+        if opts.time_unit is not None:
+            unit, reason = opts.time_unit, "given"
+        elif table.time_unit is not None:
+            unit, reason = table.time_unit, table.time_unit_reason or "stated by the format"
+        else:
+            unit, reason = infer_time_unit(table.time, name=table.time_name, stated=None, path=display)
+        timing_messages: list[str] = []
+        timestamps, channels, report, time_origin = process(
+            table.time, channels, unit=unit, unit_reason=reason, time_name=table.time_name,
+            rate=rate, rate_source=rate_source, rows=table.rows, path=display, gaps=opts.gaps,
+            gap_threshold=opts.gap_threshold, unsorted=opts.unsorted, duplicates=opts.duplicates,
+            warnings=timing_messages,
+        )
+        messages.extend((m, TimingWarning) for m in timing_messages)
+    else:
+        if opts.time_unit is not None:
+            raise ParameterError(f"time_unit={opts.time_unit!r} given but {display} has no time column")
+        if rate is None:
+            raise ParameterError(
+                f"{display}: no time column and no rate; pass rate= (Hz) or time_column="
+                f" (columns: {list_names(list(table.columns))})"
+            )
+        report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
+                         gaps=opts.gaps, gap_threshold=opts.gap_threshold)
+    n = report.samples
+    if n < MIN_SAMPLES:
+        raise DataError(f"{display}: only {n} sample(s); at least {MIN_SAMPLES} are needed")
+    messages.extend((m, InputWarning) for m in warn_texts)
+    source = Source(
+        path=display, format=table.format, sha256=table.sha256, size=table.size, detail=table.detail,
+        columns=table.columns, topic=table.topic,
+    )
+    return SensorLog(
+        channels=channels,
+        rate=report.rate,
+        timestamps=timestamps,
+        groups=groups,
+        units=units,
+        data_type=opts.data_type or table.data_type or "freq",  # type: ignore[arg-type]
+        source=source,
+        timing=report,
+        unit_origin=origin,
+        original_names={names[o]: o for o in data},
+        time_origin=time_origin,
+    )
+
+
+def list_topics(path: PathLike) -> list[TopicInfo]:
+    """Topics of a ROS 1 bag or ROS 2 bag (directory, ``.db3`` or ``.mcap``): name, type, count."""
+    p, display = _resolve(path)
+    name, _ = detect(p, display)
+    if name not in ("rosbag1", "rosbag2"):
+        raise ParameterError(f"{display}: not a ROS bag (read as {name}); list_topics reads ROS bags only")
+    return _ros.topics(p, display)
