@@ -20,6 +20,7 @@ All EDFs take ``N``, the number of **phase** points (frequency samples + 1).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Literal, NamedTuple
 
@@ -473,6 +474,10 @@ def _check_pair(statistic: str, alpha: int) -> None:
         )
 
 
+# ν depends only on its five arguments; the Greenhall sums cost milliseconds while a
+# statistic itself costs microseconds, and the same (statistic, α, m, N) recurs on
+# every call with the same record length.
+@functools.lru_cache(maxsize=4096)
 def _edf_scalar(statistic: str, alpha: int, m: int, N: int, version: str) -> tuple[float, str]:
     if statistic in _GREENHALL_STATS:
         d, modified, overlapped = _GREENHALL_STATS[statistic]
