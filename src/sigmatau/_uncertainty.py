@@ -147,8 +147,8 @@ def attach(
         ok = result.n >= 1
         low[ok] = np.maximum(result.dev[ok] - err[ok], 0.0)
         high[ok] = result.dev[ok] + err[ok]
-        edf_reasons = [r if ok[i] else "no terms" for i, r in enumerate(edf_reasons)]
-        edf_reasons = [r if not (ok[i] and r) else "" for i, r in enumerate(edf_reasons)]
+        # The simple estimate needs only n, so EDF reasons do not apply here.
+        edf_reasons = ["" if ok[i] else "no terms" for i in range(n_rows)]
     else:
         two = np.isfinite(nu) & (nu >= SINGLE_SIDED_EDF)
         one = np.isfinite(nu) & (nu > 0) & (nu < SINGLE_SIDED_EDF)
