@@ -1,13 +1,14 @@
 """sigmatau: noise analysis of sensors with the Allan family of variances.
 
 The public API is re-exported here explicitly; see ``__all__``. Submodules
+``imu`` (the gyroscope/accelerometer noise model), ``units``, ``checks``,
 ``noiseid``, ``confidence``, ``generate``, ``filterchain`` and ``datasets`` hold
-the rest of the toolkit.
+the rest of the toolkit; ``sigmatau.io`` reads sensor logs (imported on demand).
 """
 
 from __future__ import annotations
 
-from . import confidence, datasets, filterchain, generate, noiseid
+from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, units
 from ._input import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .allan import adev, mdev, oadev, ostdev, stdev, tdev
@@ -15,6 +16,7 @@ from .confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
 from .generate import mixed_noise, power_law_noise
 from .hadamard import hdev, ohdev
+from .imu import NoiseModel
 from .noiseid import fit_power_law, identify, local_slopes
 from .result import StabilityResult
 from .theo import theo1, theobr, theobr_kappa, theoh
@@ -36,6 +38,8 @@ __all__ = [
     "SigmaTauWarning", "RangeWarning",
     # conversions
     "frequency_to_phase", "phase_to_frequency",
+    # IMU noise model
+    "NoiseModel",
     # submodules
-    "confidence", "datasets", "filterchain", "generate", "noiseid",
+    "checks", "confidence", "datasets", "filterchain", "generate", "imu", "noiseid", "units",
 ]

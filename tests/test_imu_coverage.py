@@ -1,0 +1,84 @@
+"""Recovery and interval coverage of the IMU noise model over many seeds (slow).
+
+The issue's validation: EuRoC-like gyro (N = 1.6968e-4 rad/s/√Hz, K = 1.9393e-5
+rad/s²/√Hz) and accelerometer (N = 2.0e-3, K = 3.0e-3) channels and LSM6DSL-like
+channels with flicker (datasheet N 4 mdps/√Hz and 80 µg/√Hz; B 5 °/h and 50 µg,
+illustrative values: the datasheet gives none), at 200 Hz. Every seed runs the
+public :func:`sigmatau.imu.analyze` (data checks off: they do not change the
+figures of clean simulated data and cost time).
+
+Checked for every seed: the fit recovers N within 2 % and K within 25 %, and
+reports no Q or B where none was simulated (no K, Q either on the flicker
+channels). Checked over the seeds: each reported 68.3 % interval covers the true
+value at a rate consistent with 68.3 %. With S seeds the count is binomial, sd
+≈ √(0.683·0.317/S) = 6.6 % for S = 50; the accepted band [0.50, 0.90] is −2.8 sd
+to +3.3 sd (the upper side leaves room for the measured, slightly conservative
+intervals; see the imu module docstring for the measured numbers).
+
+Runtime: 50 seeds × 4 channels. At the full 3 h (2.16 M samples per channel)
+one seed-channel costs 0.6 s (EuRoC: 0.1 s to simulate, 0.5 s to analyse) to
+1.2 s (LSM6DSL: the exact flicker generator adds 0.7 s) on the 2-core machine
+when it is quiet, twice that when it is shared: 3–6 min in all, over the
+3-minute budget. So the EuRoC channels, which the issue specifies at 3 h, run at
+full length, and the LSM6DSL channels at 1 h (720 000 samples; the longest τ is
+660 s instead of 2600 s). The full-length 50-seed run of all four channels is
+reported in the module docstring of :mod:`sigmatau.imu`.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from sigmatau.imu import ImuWarning, analyze, simulate
+
+SEEDS = 50
+RATE = 200.0
+#: name: (preset, unit, extra terms, truth, duration in s)
+CHANNELS = {
+    "euroc-gyro": ("euroc-gyro", "rad/s", {}, {"N": 1.6968e-4, "K": 1.9393e-5}, 3 * 3600.0),
+    "euroc-accel": ("euroc-accel", "m/s^2", {}, {"N": 2.0e-3, "K": 3.0e-3}, 3 * 3600.0),
+    "lsm6dsl-gyro": ("lsm6dsl-gyro", "deg/s", {"B": 5.0 / 3600.0}, {"N": 4.0e-3, "B": 5.0 / 3600.0}, 3600.0),
+    "lsm6dsl-accel": ("lsm6dsl-accel", "g", {"B": 50e-6}, {"N": 80e-6, "B": 50e-6}, 3600.0),
+}
+
+
+def _run(name: str, seed: int):
+    preset, unit, extra, _, duration = CHANNELS[name]
+    y = simulate(preset, duration=duration, rate=RATE, unit=unit, rng=seed, **extra)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImuWarning)
+        return analyze(y, rate=RATE, unit=unit, checks=False)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(CHANNELS))
+def test_recovery_and_coverage(name):
+    truth = CHANNELS[name][3]
+    covered = {t: 0 for t in truth}
+    errors = {t: [] for t in truth}
+    spurious = []
+    for seed in range(SEEDS):
+        m = _run(name, 1000 + seed)
+        for t, v in truth.items():
+            p = getattr(m, t)
+            assert p.resolved, (name, seed, t)
+            errors[t].append(p.value / v - 1.0)
+            covered[t] += p.low <= v <= p.high
+        spurious += [(seed, t) for t in "QNBKR" if t not in truth and getattr(m, t).resolved]
+    err_n = np.abs(errors["N"])
+    assert err_n.max() < 0.02, (name, err_n.max())
+    if "K" in errors:
+        assert np.abs(errors["K"]).max() < 0.25, (name, np.abs(errors["K"]).max())
+    bad = [(s, t) for s, t in spurious if t in ("Q", "B", "K")]
+    assert bad == [], (name, bad)
+    assert len(spurious) <= 2, (name, spurious)          # R from a flicker realisation's drift, rarely
+    for t in truth:
+        rate = covered[t] / SEEDS
+        rms = math.sqrt(np.mean(np.square(errors[t])))
+        worst = 100 * np.max(np.abs(errors[t]))
+        print(f"{name} {t}: coverage {rate:.2f}, rms error {100 * rms:.2f} %, max {worst:.2f} %")
+        assert 0.50 <= rate <= 0.90, (name, t, rate)
