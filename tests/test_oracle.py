@@ -202,10 +202,8 @@ def check_all(name: str, var: np.ndarray, y: np.ndarray, x: np.ndarray, ms: list
     np.testing.assert_allclose(var, sums, rtol=SUMS_RTOL, atol=0, err_msg=f"{name} vs SP1065 sums, m={ms}")
 
 
-def cases(long: bool = False):
-    for name in SPECS:
-        for noise in NOISES:
-            yield pytest.param(name, noise, id=f"{name}-{noise}")
+def cases(long: bool = False) -> list:
+    return [pytest.param(name, noise, id=f"{name}-{noise}") for name in SPECS for noise in NOISES]
 
 
 @pytest.mark.parametrize("rate", [1.0, 104.0])
