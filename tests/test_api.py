@@ -10,7 +10,7 @@ STATISTICS = [
     "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
 ]
 OTHER_NAMES = [
-    "theobr_kappa", "NoiseModel", "imu", "units", "checks",
+    "theobr_kappa", "compute_channels", "NoiseModel", "imu", "units", "checks",
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     "power_law_noise", "mixed_noise", "confidence", "datasets", "filterchain", "generate", "noiseid",
 ]

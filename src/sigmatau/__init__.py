@@ -12,6 +12,7 @@ from . import checks, confidence, datasets, filterchain, generate, imu, noiseid,
 from ._input import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .allan import adev, mdev, oadev, ostdev, stdev, tdev
+from .channels import compute_channels
 from .confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
 from .generate import mixed_noise, power_law_noise
@@ -28,7 +29,7 @@ __all__ = [
     # statistics
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
     "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
-    "theobr_kappa",
+    "theobr_kappa", "compute_channels",
     # uncertainty and noise identification
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     # noise generation
