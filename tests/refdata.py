@@ -5,6 +5,7 @@ Provenance and licence of the files: tests/data/allantools/README.md.
 
 from __future__ import annotations
 
+import functools
 import gzip
 from dataclasses import dataclass
 from pathlib import Path
@@ -92,3 +93,19 @@ def pink_frequency() -> np.ndarray:
 
 
 PINK_RATE = 1.0 / 42.0
+
+
+@functools.lru_cache(maxsize=None)
+def dataset(name: str) -> tuple[np.ndarray, float, str]:
+    """(data, rate, data_type) of a reference data set, as the Stable32 runs read it."""
+    if name == "phasedat":
+        return phase_dat(), 1.0, "phase"
+    if name == "gps":
+        return gps_phase(), 1.0, "phase"
+    if name == "ocxo":
+        return ocxo_frequency(), 1.0, "freq"
+    if name == "tic":
+        return tic_phase(), 1.0, "phase"
+    if name == "pink":
+        return pink_frequency(), PINK_RATE, "freq"
+    raise KeyError(name)

@@ -61,3 +61,10 @@ def test_import_loads_no_plotting_or_io_backend():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == ""
+
+
+def test_import_defers_heavy_scipy_modules():
+    # scipy.stats and scipy.optimize double the import time; they load only when used.
+    code = "import sys, sigmatau; print([m for m in ('scipy.stats', 'scipy.optimize') if m in sys.modules])"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

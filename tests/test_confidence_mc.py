@@ -438,20 +438,7 @@ def test_discrete_edf_closed_forms():
 # =====================================================================================
 
 
-@functools.cache
-def dataset(name: str) -> tuple[np.ndarray, float, str]:
-    """(data, rate, data_type) as the Stable32 runs read them (see test_reference_allan)."""
-    if name == "phasedat":
-        return refdata.phase_dat(), 1.0, "phase"
-    if name == "gps":
-        return refdata.gps_phase(), 1.0, "phase"
-    if name == "ocxo":
-        return refdata.ocxo_frequency(), 1.0, "freq"
-    if name == "tic":
-        return refdata.tic_phase(), 1.0, "phase"
-    if name == "pink":
-        return refdata.pink_frequency(), refdata.PINK_RATE, "freq"
-    raise KeyError(name)
+dataset = refdata.dataset
 
 
 def _s32_tables():

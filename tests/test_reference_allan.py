@@ -175,20 +175,7 @@ def test_nbs9_deviation(statistic):
 # --- Stable32 tables (tests/data/allantools) ---------------------------------------------
 
 
-@functools.lru_cache(maxsize=None)
-def dataset(name: str) -> tuple[np.ndarray, float, str]:
-    """(data, rate, data_type) of a reference data set, as the Stable32 runs read it."""
-    if name == "phasedat":
-        return refdata.phase_dat(), 1.0, "phase"
-    if name == "gps":
-        return refdata.gps_phase(), 1.0, "phase"
-    if name == "ocxo":
-        return refdata.ocxo_frequency(), 1.0, "freq"
-    if name == "tic":
-        return refdata.tic_phase(), 1.0, "phase"
-    if name == "pink":
-        return refdata.pink_frequency(), refdata.PINK_RATE, "freq"
-    raise KeyError(name)
+dataset = refdata.dataset
 
 
 _STATS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev")

@@ -99,8 +99,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Literal, Mapping, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
-from scipy import stats
-from scipy.optimize import brentq, lsq_linear, minimize_scalar, nnls
+from scipy.special import chdtrc, ndtri
 
 from ._input import as_series, check_rate
 from .allan import oadev
@@ -1142,7 +1141,7 @@ def _chi2_tail(chi2: float, mean: float, sd: float) -> float:
     if not (mean > 0 and sd > 0):
         return 1.0
     nu = 2.0 * mean**2 / sd**2
-    return float(stats.chi2.sf(chi2 * nu / mean, nu))
+    return float(chdtrc(nu, chi2 * nu / mean))
 
 
 def _irls(design: np.ndarray, var: np.ndarray, rel: np.ndarray, signed: np.ndarray, iterations: int = 3):
@@ -1150,6 +1149,8 @@ def _irls(design: np.ndarray, var: np.ndarray, rel: np.ndarray, signed: np.ndarr
     columns), weights from the model variance: σ_i = model_i·rel_i, three
     reweighting passes (as :func:`sigmatau.noiseid.fit_power_law`, whose helper
     has no signed columns)."""
+    from scipy.optimize import lsq_linear, nnls  # imported here: keeps `import sigmatau` light
+
     sigma = var * rel
     lower = np.where(signed, -np.inf, 0.0)
     for it in range(iterations + 1):
@@ -1215,6 +1216,8 @@ def _discrepancy(design, var, nu, taus, cols) -> tuple[float, float]:
     """Relative error floor ε per τ that brings the χ² of the full fit down to its
     expectation, when its tail probability is below ``_EPS_TRIGGER``; and χ²/dof
     without it."""
+    from scipy.optimize import brentq  # imported here: keeps `import sigmatau` light
+
     chi2, mean, sd = _chi2_expectation(design, var, nu, taus, cols, 0.0)
     dof = taus.size - len(cols)
     raw = chi2 / dof if dof > 0 else math.nan
@@ -1295,7 +1298,7 @@ def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, t
 
 def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str], taus: np.ndarray
                     ) -> dict[str, Parameter]:
-    z = stats.norm.ppf(0.5 + conf / 2.0)
+    z = ndtri(0.5 + conf / 2.0)
     out = {}
     for t in terms:
         j = TERMS.index(t)
@@ -1729,6 +1732,7 @@ def optimal_averaging(model: NoiseModel, *, draws: int = 400) -> OptimalAveragin
     k_min = int(np.argmin(model.result.dev))
     data_tau, data_dev = float(taus[k_min]), float(model.result.dev[k_min])
     conf = model.confidence
+    from scipy.optimize import minimize_scalar  # imported here: keeps `import sigmatau` light
 
     def argmin(c: np.ndarray) -> tuple[float, float]:
         if c[3] <= 0 and c[4] <= 0:

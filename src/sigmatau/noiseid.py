@@ -24,7 +24,6 @@ from dataclasses import dataclass, field
 from typing import Literal, Mapping, Optional, Sequence, Union
 
 import numpy as np
-from scipy.optimize import brentq, nnls
 
 from ._input import as_series, check_data_type, check_rate
 from ._numeric import block_means, dot, sumsq
@@ -416,6 +415,8 @@ def _b1_classify(ratio: float, nb: int) -> tuple[int, float]:
     elif ratio >= expected[-1]:
         mu_hat = float(hi)
     else:
+        from scipy.optimize import brentq  # imported here: keeps `import sigmatau` light
+
         mu_hat = brentq(lambda u: float(b1_expected(nb, u)) - ratio, lo, hi, xtol=1e-6)
     return mu, mu_hat
 
@@ -1129,6 +1130,8 @@ def _weighted_nnls(design: np.ndarray, var: np.ndarray, nu: np.ndarray, iteratio
     Returns the coefficients, the per-τ standard errors used as weights and the
     weighted χ².
     """
+    from scipy.optimize import nnls  # imported here: keeps `import sigmatau` light
+
     rel = np.sqrt(2.0 / nu)
     sigma = var * rel
     for it in range(iterations + 1):
