@@ -1,9 +1,9 @@
 """Benchmark sigmatau against allantools: times, speed-ups, agreement and peak memory.
 
-Run ``python bench/run.py`` (everything, about an hour or more), ``--quick``
-(a few minutes, smaller sizes) or pick statistics and sizes with ``--stats`` and
-``--sizes``. bench/README.md explains the method and every option; the results
-go to bench/results/ as Markdown and CSV.
+Run ``python bench/run.py`` (everything, 40-60 minutes on the 2-core reference
+machine), ``--quick`` (5-10 minutes, smaller sizes) or pick statistics and
+sizes with ``--stats`` and ``--sizes``. bench/README.md explains the method
+and every option; the results go to bench/results/ as Markdown and CSV.
 """
 
 from __future__ import annotations
@@ -494,7 +494,7 @@ class Report:
         out = [
             f"# sigmatau vs allantools — benchmark of {mi['date']}",
             "",
-            f"Command: `python bench/run.py {' '.join(self.argv)}`".rstrip() + f" (mode: {mode})"
+            f"Command: `{' '.join(['python bench/run.py', *self.argv])}` (mode: {mode})"
             + ("" if self.finished else " — **incomplete: run still going or interrupted**"),
             "",
             "## Machine",
@@ -731,7 +731,7 @@ def build_parser() -> argparse.ArgumentParser:
                     " measure peak memory, and write a Markdown and a CSV report.",
     )
     p.add_argument("--quick", action="store_true",
-                   help="smaller sizes (see README): a few minutes instead of an hour or more")
+                   help="smaller sizes (see README): minutes instead of most of an hour")
     p.add_argument("--stats", type=parse_stats, default=None,
                    help="comma-separated statistics to run (default: those of the targets)")
     p.add_argument("--sizes", type=parse_sizes, default=None,
