@@ -1,35 +1,432 @@
-"""The command-line entry point."""
+"""The ``sigmatau`` command: every subcommand in-process, outputs, error paths and exit codes."""
 
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import math
+import shutil
 import subprocess
 import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+from sigmatau import __version__
 from sigmatau.cli import main
+from sigmatau.units import convert
+
+matplotlib = pytest.importorskip("matplotlib")
+yaml = pytest.importorskip("yaml")
 
 
-def test_demo_prints_nbs_table(capsys):
-    assert main(["demo"]) == 0
-    out = capsys.readouterr().out
-    # OADEV of the NBS set at tau = 1 s (NIST SP 1065 Table 31): 2.922319e-01
-    assert "2.922319e-01" in out
-    assert "oadev" in out
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def test_version(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main(["--version"])
-    assert exc.value.code == 0
-    assert "sigmatau" in capsys.readouterr().out
+def _run(argv, capsys):
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _one_line_error(err: str, *patterns: str) -> None:
+    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("sigmatau: warning:")]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for p in patterns:
+        assert p in lines[0], (p, lines[0])
+
+
+def _no_partial(folder: Path) -> None:
+    assert not [p.name for p in folder.iterdir() if ".partial" in p.name or ".old-" in p.name]
+
+
+@pytest.fixture(scope="module")
+def imu_csv(tmp_path_factory) -> Path:
+    """A 10-minute 6-axis log at 100 Hz written by ``sigmatau simulate`` (known truth)."""
+    folder = tmp_path_factory.mktemp("log")
+    path = folder / "imu.csv"
+    assert main(["simulate", str(path), "--preset", "lsm6dsl", "--duration", "600", "--rate", "100",
+                 "--seed", "3", "--gyro-unit", "deg/s", "--accel-unit", "g"]) == 0
+    return path
+
+
+@pytest.fixture(scope="module")
+def analyzed(imu_csv, tmp_path_factory):
+    """``sigmatau analyze`` with the default statistics on the simulated log."""
+    out = tmp_path_factory.mktemp("res") / "out"
+    before = _digest(imu_csv)
+    code = main(["analyze", str(imu_csv), "--out", str(out), "--datasheet", "lsm6dsl", "--figures", "png,svg,pdf"])
+    assert code == 0
+    assert _digest(imu_csv) == before  # the input is only read
+    return out
+
+
+# --------------------------------------------------------------------------- help
+
+
+def test_version_and_help(capsys):
+    code, out, _ = _run(["--version"], capsys)
+    assert code == 0 and out.strip() == f"sigmatau {__version__}"
+    for cmd in ("demo", "analyze", "stats", "simulate"):
+        code, out, _ = _run([cmd, "--help"], capsys)
+        assert code == 0
+        assert "examples:" in out and "exit codes" in out
+    code, out, _ = _run(["analyze", "--help"], capsys)
+    assert "gyro rad/s and accel m/s^2" in out  # the unit defaults are stated
 
 
 def test_no_command_is_usage_error(capsys):
-    with pytest.raises(SystemExit) as exc:
-        main([])
-    assert exc.value.code == 2
+    code, _, err = _run([], capsys)
+    assert code == 2
+    assert "usage" in err
 
 
-def test_module_entry_point_runs():
-    out = subprocess.run([sys.executable, "-m", "sigmatau", "demo"], capture_output=True, text=True)
-    assert out.returncode == 0, out.stderr
-    assert "2.922319e-01" in out.stdout
+def test_unknown_command_and_option(capsys):
+    code, _, err = _run(["frobnicate"], capsys)
+    assert code == 2
+    _one_line_error(err, "invalid choice")
+    code, _, err = _run(["stats", "x.csv", "--bogus"], capsys)
+    assert code == 2
+    _one_line_error(err, "--bogus")
+
+
+# --------------------------------------------------------------------- simulate
+
+
+def test_simulate_csv_header_units_and_truth(imu_csv):
+    with open(imu_csv) as fh:
+        header = next(csv.reader(fh))
+    assert header == ["timestamp [s]", "gyro_x [deg/s]", "gyro_y [deg/s]", "gyro_z [deg/s]",
+                      "accel_x [g]", "accel_y [g]", "accel_z [g]"]
+    data = np.loadtxt(imu_csv, delimiter=",", skiprows=1)
+    assert data.shape == (60000, 7)
+    # white noise density of the LSM6DSL preset (4 mdps/√Hz): sample std = N·√rate
+    std = data[:, 1:4].std(axis=0)
+    expected = convert(4.0, "mdps/sqrt(Hz)", "deg/s/sqrt(Hz)") * math.sqrt(100.0)
+    assert np.all(np.abs(std / expected - 1) < 0.02)
+
+
+def test_simulate_npz_npy_explicit_terms_and_power_law(tmp_path, capsys):
+    from sigmatau import io
+
+    npz = tmp_path / "g.npz"
+    code, _, err = _run(["simulate", npz, "--preset", "none", "--sensors", "gyro", "--rate", "200",
+                         "--duration", "60", "--gyro-N", "0.2 deg/sqrt(h)", "--gyro-B", "3 deg/h"], capsys)
+    assert code == 0, err
+    log = io.read(npz)
+    assert log.names == ("gyro_x", "gyro_y", "gyro_z") and log.rate == pytest.approx(200.0)
+    expected = convert(0.2, "deg/sqrt(h)", "rad/s/sqrt(Hz)") * math.sqrt(200.0)
+    assert np.std(log["gyro_x"]) == pytest.approx(expected, rel=0.05)
+    npy = tmp_path / "clock.npy"
+    code, _, err = _run(["simulate", npy, "--h", "h0=1e-22", "--duration", "1000", "--rate", "1"], capsys)
+    assert code == 0, err
+    y = np.load(npy)
+    assert y.shape == (1000,)
+    # white FM: AVAR(1 s) = h0/2 → sample variance ≈ h0/2 (one-sided PSD h0 up to 0.5 Hz)
+    assert np.var(y) == pytest.approx(0.5e-22, rel=0.15)
+    code, _, err = _run(["simulate", npy, "--h", "h0=1e-22"], capsys)
+    assert code == 2
+    _one_line_error(err, "exists", "--force")
+
+
+@pytest.mark.parametrize("argv, pattern", [
+    (["simulate", "x.txt"], "must end in .csv"),
+    (["simulate", "x.csv", "--duration", "-1"], "--duration"),
+    (["simulate", "x.csv", "--preset", "nosuch"], "choose from"),
+    (["simulate", "x.csv", "--sensors", "magnet"], "magnet"),
+    (["simulate", "x.csv", "--gyro-N", "abc"], "value [unit]"),
+    (["simulate", "x.csv", "--gyro-N", "1 m/s"], "--gyro-N"),
+    (["simulate", "x.csv", "--h", "h7=1"], "ALPHA"),
+])
+def test_simulate_usage_errors(tmp_path, capsys, monkeypatch, argv, pattern):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = _run(argv, capsys)
+    assert code == 2
+    _one_line_error(err, pattern)
+    assert not list(tmp_path.iterdir())
+
+
+# ----------------------------------------------------------------------- analyze
+
+
+def test_analyze_writes_every_output(analyzed):
+    names = {p.name for p in analyzed.iterdir()}
+    assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} <= names
+    for group in ("gyro", "accel"):
+        for ext in ("png", "svg", "pdf"):
+            assert f"sigma_tau_{group}.{ext}" in names
+    for ch in ("gyro_x", "accel_z"):
+        assert f"signal_{ch}.png" in names
+    _no_partial(analyzed.parent)
+    assert (analyzed / f"sigma_tau_gyro.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (analyzed / f"sigma_tau_gyro.pdf").read_bytes()[:5] == b"%PDF-"
+
+
+def test_results_json_records_everything(analyzed, imu_csv):
+    data = json.loads((analyzed / "results.json").read_text())
+    assert data["tool"] == {"name": "sigmatau", "version": __version__}
+    assert data["input"]["sha256"] == _digest(imu_csv)
+    assert data["input"]["format"] == "csv"
+    s = data["settings"]
+    assert s["statistics"] == ["oadev", "mdev", "tdev", "ohdev", "totdev", "theoh"]
+    assert s["confidence"] == pytest.approx(0.6827) and s["axis_rule"] == "max"
+    assert data["log"]["timing"]["gaps"] == [] and data["log"]["rate"] == pytest.approx(100.0)
+    chans = {c["name"]: c for c in data["channels"]}
+    assert list(chans) == ["gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"]
+    gx = chans["gyro_x"]
+    assert set(gx["statistics"]) == set(s["statistics"])
+    oadev = gx["statistics"]["oadev"]
+    assert len(oadev["taus"]) == len(oadev["dev"]) == len(oadev["edf"]) == len(oadev["alpha"])
+    assert all(lo < d < hi for lo, d, hi in zip(oadev["ci_low"], oadev["dev"], oadev["ci_high"]) if lo and hi)
+    # the model is in deg/s (the samples' unit) with SI and customary conversions
+    model = gx["model"]
+    assert model["unit"] == "deg/s"
+    n_si = model["si"]["N"]
+    truth = convert(4.0, "mdps/sqrt(Hz)", "rad/s/sqrt(Hz)")
+    assert n_si["low"] < truth * 1.01 and n_si["high"] > truth * 0.99
+    assert gx["datasheet"][0]["term"] == "N"
+    assert data["figures"] and all(f["files"] for f in data["figures"])
+
+
+def test_statistics_and_model_csv(analyzed):
+    with open(analyzed / "statistics.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert {r["statistic"] for r in rows} == {"oadev", "mdev", "tdev", "ohdev", "totdev", "theoh"}
+    first = next(r for r in rows if r["channel"] == "gyro_x" and r["statistic"] == "oadev")
+    assert first["m"] == "1" and float(first["tau_s"]) == pytest.approx(0.01)
+    assert float(first["dev_low"]) < float(first["dev"]) < float(first["dev_high"])
+    with open(analyzed / "model.csv") as fh:
+        model = list(csv.DictReader(fh))
+    n_si = [r for r in model if r["channel"] == "gyro_x" and r["term"] == "N" and r["unit_kind"] == "si"]
+    assert n_si[0]["unit"] == "rad/s/sqrt(Hz)" and n_si[0]["resolved"] == "True"
+    assert any(r["unit"] == "deg/sqrt(h)" for r in model)
+
+
+def test_kalibr_yaml_is_valid_and_states_the_rule(analyzed):
+    text = (analyzed / "imu.yaml").read_text()
+    doc = yaml.safe_load(text)
+    for key in ("accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
+                "gyroscope_random_walk", "update_rate"):
+        assert isinstance(doc[key], float), key  # PyYAML (Kalibr) must read floats, not strings
+    assert doc["rostopic"] == "/imu0" and doc["update_rate"] == 100.0
+    assert "axes combined: largest of the axes" in text
+    assert "gyroscope_sigma_d" in text and "discrete-time" in text
+    data = json.loads((analyzed / "results.json").read_text())
+    per_axis = [c["model"]["si"]["N"]["value"] for c in data["channels"] if c["group"] == "gyro"]
+    assert doc["gyroscope_noise_density"] == pytest.approx(max(per_axis), rel=1e-6)
+
+
+def test_report_html_is_self_contained(analyzed):
+    html = (analyzed / "report.html").read_text()
+    assert html.startswith("<!DOCTYPE html>")
+    assert html.count('src="data:image/png;base64,') == 8  # 2 σ–τ + 6 signal figures
+    assert "http://" not in html and "https://" not in html and "<script" not in html
+    assert "gyroscope_noise_density" in html  # the YAML
+    assert "Data checks" in html and "Noise model" in html and "AF" in html
+
+
+def test_analyze_summary_on_stdout(imu_csv, tmp_path, capsys):
+    code, out, err = _run(["analyze", imu_csv, "--out", tmp_path / "o", "--stat", "oadev", "--no-figures",
+                           "--axis-rule", "rms", "--quiet"], capsys)
+    assert code == 0, err
+    assert "angle random walk" in out and "°/√h" in out and "rad/s/√Hz" in out
+    assert "[not-resolved" in out  # flags
+    assert "root mean square of the axes" in out
+    assert not list((tmp_path / "o").glob("*.png"))
+    assert err == ""  # quiet, and no warnings on stderr (flags are in the summary)
+
+
+def test_output_directory_policy(imu_csv, tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "keep.txt").write_text("mine")
+    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures"], capsys)
+    assert code == 2
+    _one_line_error(err, "exists", "--force")
+    assert (out / "keep.txt").read_text() == "mine"
+    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures", "--force"], capsys)
+    assert code == 0, err
+    assert not (out / "keep.txt").exists() and (out / "results.json").exists()
+    _no_partial(tmp_path)
+
+
+def test_force_never_deletes_the_input(tmp_path, imu_csv, capsys):
+    folder = tmp_path / "d"
+    folder.mkdir()
+    log = folder / "imu.csv"
+    shutil.copy(imu_csv, log)
+    code, _, err = _run(["analyze", log, "--out", folder, "--force", "--stat", "oadev", "--no-figures"], capsys)
+    assert code == 2
+    _one_line_error(err, "contains the input")
+    assert _digest(log) == _digest(imu_csv)
+
+
+def test_failure_while_writing_leaves_nothing(imu_csv, tmp_path, capsys, monkeypatch):
+    from sigmatau import plots
+
+    def boom(*a, **k):
+        raise RuntimeError("disk on fire")
+
+    monkeypatch.setattr(plots, "save_figure", boom)
+    out = tmp_path / "o"
+    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev"], capsys)
+    assert code == 3
+    _one_line_error(err, "internal error", "disk on fire", "--debug")
+    assert not out.exists()
+    _no_partial(tmp_path)
+    with pytest.raises(RuntimeError, match="disk on fire"):
+        main(["analyze", str(imu_csv), "--out", str(out), "--stat", "oadev", "--debug"])
+    assert not out.exists()
+    _no_partial(tmp_path)
+
+
+# ------------------------------------------------------------------ input errors
+
+
+def _write(path: Path, text: str) -> Path:
+    path.write_text(text)
+    return path
+
+
+def _write_bytes(path: Path, data: bytes) -> Path:
+    path.write_bytes(data)
+    return path
+
+
+@pytest.mark.parametrize("make, extra, code, patterns", [
+    (lambda d: d / "missing.csv", [], 1, ["missing.csv", "no such file"]),
+    (lambda d: _write(d / "words.csv", "a,b\nx,y\nz,w\n"), [], 1, ["words.csv", "numeric"]),
+    (lambda d: _write(d / "short.csv", "t,gyro_x\n0,1\n0.01,2\n"), [], 1, ["short.csv"]),
+    (lambda d: _write(d / "short.csv", "t,gyro_x\n0,1\n0.01,2\n0.02,3\n"), ["--stat", "theobr"], 1,
+     ["too few samples for any statistic"]),
+    (lambda d: _write_bytes(d / "bad.npy", b"\x93NUMPY garbage"), [], 1, ["bad.npy"]),
+    (lambda d: _write(d / "nan.csv", "t,gyro_x\n" + "".join(f"{i / 100},{'nan' if i == 50 else i % 7}\n"
+                                                         for i in range(200))), [], 1, ["NaN"]),
+    (lambda d: _write(d / "gap.csv", "t,gyro_x\n" + "".join(f"{i / 100 if i < 100 else i / 100 + 1},{i % 7}\n"
+                                                          for i in range(300))), [], 1, ["gap"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--columns", "gyro_q"], 2, ["gyro_q", "gyro_x"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--stat", "adev,zdev"], 2, ["zdev", "choose from"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--confidence", "1.5"], 2, ["--confidence"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--figures", "gif"], 2, ["gif"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--gyro-unit", "furlongs"], 2, ["furlongs"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--taus", "weekly"], 2, ["weekly"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--datasheet", "nosuchpart"], 2, ["nosuchpart", "lsm6dsl"]),
+    (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),
+     ["--gaps", "maybe"], 2, ["maybe"]),
+])
+def test_analyze_errors_one_line_with_exit_code(tmp_path, capsys, make, extra, code, patterns):
+    src = make(tmp_path)
+    before = _digest(src) if src.exists() else None
+    out = tmp_path / "out"
+    got, stdout, err = _run(["analyze", src, "--out", out, "--no-figures", *extra], capsys)
+    assert got == code, err
+    _one_line_error(err, *patterns)
+    assert not out.exists()
+    _no_partial(tmp_path)
+    if before is not None:
+        assert _digest(src) == before
+
+
+def test_debug_shows_the_traceback(tmp_path):
+    with pytest.raises(Exception, match="no such file"):
+        main(["analyze", str(tmp_path / "nothing.csv"), "--debug"])
+
+
+def test_gap_split_analyses_the_longest_segment(tmp_path, capsys):
+    rng = np.random.default_rng(5)
+    t = np.concatenate([np.arange(3000), np.arange(3005, 4005)]) / 100.0
+    g = rng.standard_normal(t.size) * 1e-3
+    lines = "t,gyro_x\n" + "".join(f"{a:.2f},{float(b)!r}\n" for a, b in zip(t, g))
+    src = _write(tmp_path / "gappy.csv", lines)
+    code, out, err = _run(["analyze", src, "--out", tmp_path / "o", "--gaps", "split", "--stat", "oadev",
+                           "--no-figures"], capsys)
+    assert code == 0, err
+    data = json.loads((tmp_path / "o" / "results.json").read_text())
+    assert data["channels"][0]["n_samples"] == 3000
+    assert "longest" in data["notes"][0] and "3000 of 4000" in data["notes"][0]
+
+
+# ------------------------------------------------------------------------ stats
+
+
+def test_stats_table_matches_the_library(tmp_path, capsys):
+    import sigmatau
+    from sigmatau.datasets import nbs1000
+
+    y = nbs1000()
+    src = _write(tmp_path / "nbs.txt", "".join(f"{float(v)!r}\n" for v in y))
+    code, out, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--stat", "adev,oadev"], capsys)
+    assert code == 0, err
+    assert "AF" in out and "Min Sigma" in out and "Max Sigma" in out
+    # NBS 1000 OADEV at tau = 1 s (NIST SP 1065 Table 31): 2.922319e-01 → printed to 5 digits
+    assert "2.9223e-01" in out
+    ref = sigmatau.oadev(y, taus="octave")
+    assert f"{ref.ci_high[2]:.4e}" in out
+    csv_path = tmp_path / "s.csv"
+    code, _, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--stat", "mdev", "--csv", csv_path],
+                        capsys)
+    assert code == 0, err
+    rows = list(csv.DictReader(open(csv_path)))
+    assert rows[0]["statistic"] == "mdev" and float(rows[0]["dev"]) == pytest.approx(
+        sigmatau.mdev(y).dev[0], rel=1e-15)
+    code, _, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--csv", csv_path], capsys)
+    assert code == 2
+    _one_line_error(err, "exists")
+    code, out, _ = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--csv", "-"], capsys)
+    assert code == 0 and out.startswith("channel,group,unit,statistic")
+
+
+def test_stats_too_short_for_a_statistic_is_reported(tmp_path, capsys):
+    src = _write(tmp_path / "y.txt", "".join(f"{v}\n" for v in np.random.default_rng(1).standard_normal(40)))
+    code, out, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--stat", "oadev,theobr"], capsys)
+    assert code == 0, err
+    assert "THEOBR: not computed" in out
+
+
+def test_stats_stable32_phase_file(tmp_path, capsys):
+    from refdata import dataset
+
+    src = tmp_path / "phase.dat"
+    np.savetxt(src, dataset("phasedat")[0])
+    code, out, err = _run(["stats", src, "--data-type", "phase", "--rate", "1", "--stat", "adev"], capsys)
+    assert code == 0, err
+    assert "ADEV" in out
+
+
+# ------------------------------------------------------------------------- demo
+
+
+def test_demo_runs_the_full_analysis(tmp_path, capsys):
+    out = tmp_path / "demo"
+    code, stdout, err = _run(["demo", "--out", out, "--duration", "600", "--rate", "52", "--quiet"], capsys)
+    assert code == 0, err
+    assert "demo: simulating a 6-axis LSM6DSL-like IMU" in err
+    names = {p.name for p in out.iterdir()}
+    assert {"report.html", "imu.yaml", "results.json", "sigma_tau_gyro.png", "sigma_tau_accel.svg"} <= names
+    data = json.loads((out / "results.json").read_text())
+    assert data["settings"]["datasheet"]["gyro"]["N"][1] == "rad/s/sqrt(Hz)"
+    assert "datasheet N" in stdout
+
+
+def test_installed_entry_point(tmp_path):
+    exe = shutil.which("sigmatau")
+    if exe is None:
+        pytest.skip("the console script is not on PATH (package not installed)")
+    out = subprocess.run([exe, "--version"], capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.strip() == f"sigmatau {__version__}"
+    out = subprocess.run([exe, "analyze", str(tmp_path / "none.csv")], capture_output=True, text=True)
+    assert out.returncode == 1
+    _one_line_error(out.stderr, "no such file")
+    mod = subprocess.run([sys.executable, "-m", "sigmatau", "--version"], capture_output=True, text=True)
+    assert mod.returncode == 0 and mod.stdout.strip() == f"sigmatau {__version__}"

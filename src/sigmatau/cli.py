@@ -1,66 +1,680 @@
 """The ``sigmatau`` command.
 
-Thin layer over the public API: it parses arguments, calls the library and
-prints. Errors become one line on stderr and a non-zero exit code.
+A thin layer over the public API (:mod:`sigmatau.io`, :mod:`sigmatau.analysis`,
+:mod:`sigmatau.outputs`, :mod:`sigmatau.imu`): it parses arguments, calls the
+library and prints. Every error is one line on stderr — exit code 2 for a
+usage error (a bad option value, a column or topic that does not exist, an
+output that exists), 1 for a data error (a missing, unreadable or corrupt file,
+no numeric data, too few samples) — with the traceback only under ``--debug``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
-from typing import Optional, Sequence
+import tempfile
+import textwrap
+import warnings
+from pathlib import Path
+from typing import Any, NoReturn, Optional, Sequence
 
 from . import __version__
 
 __all__ = ["main"]
 
-_DEMO_STATS = ("adev", "oadev", "mdev", "tdev", "hdev", "ohdev")
+EXIT_OK, EXIT_DATA, EXIT_USAGE, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+
+#: The demo's simulated IMU: LSM6DSL datasheet noise densities (as quoted in
+#: ST DT0064) with bias instability and random walk of a typical consumer MEMS
+#: part added so the σ–τ curves show the whole bathtub. Illustrative values, SI.
+DEMO_IMU = {
+    "gyro": {"preset": "lsm6dsl-gyro", "B": 2.4e-5, "K": 1.5e-6},    # B ≈ 5 °/h, K ≈ 18.6 °/h/√h
+    "accel": {"preset": "lsm6dsl-accel", "B": 2.0e-4, "K": 2.0e-5},  # B ≈ 20 µg, K ≈ 2 µg/√s
+}
 
 
-def _demo(args: argparse.Namespace) -> int:
+class _UsageError(Exception):
+    """Raised by the parser instead of exiting, so ``main`` returns the code."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        raise _UsageError(f"{self.prog}: error: {message}")
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    def __init__(self, prog: str) -> None:
+        super().__init__(prog, max_help_position=32, width=100)
+
+
+# --------------------------------------------------------------------- messages
+
+
+class _Console:
+    def __init__(self, quiet: bool) -> None:
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+
+    def progress(self, text: str) -> None:
+        if not self.quiet and self.tty:
+            print(f"  {text}", file=sys.stderr, flush=True)
+
+
+def _showwarning(message: Any, category: type, filename: str, lineno: int, file: Any = None,
+                 line: Optional[str] = None) -> None:
+    print(f"sigmatau: warning: {message}", file=sys.stderr)
+
+
+# ---------------------------------------------------------------------- options
+
+
+def _add_input_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("input")
+    g.add_argument("log", help="the log: CSV/TSV/text, .npy/.npz, Stable32 data, ROS 1 .bag, ROS 2 bag directory"
+                               " (sqlite3 or MCAP), HDF5 (.h5) or Parquet")
+    g.add_argument("--format", help="reader, when detection is not wanted: csv, stable32, npy, npz, rosbag1,"
+                                    " rosbag2, hdf5, parquet")
+    g.add_argument("--columns", help="channels by column name or 0-based index, comma-separated"
+                                     " (default: the IMU columns, else every numeric column)")
+    g.add_argument("--time-column", help="the timestamp column (default: found by name); 'none' for none")
+    g.add_argument("--time-unit", choices=["s", "ms", "us", "ns", "min", "h", "d"],
+                   help="unit of the timestamps (default: from the name, magnitude or step)")
+    g.add_argument("--rate", type=float, help="sample rate in Hz (needed without timestamps; overrides them)")
+    g.add_argument("--data-type", choices=["freq", "phase"],
+                   help="freq: sensor output or fractional frequency (default); phase: integrated data")
+    g.add_argument("--topic", help="ROS bags: the sensor_msgs/Imu topic (needed when there are several)")
+    g.add_argument("--list-topics", action="store_true", help="ROS bags: list the topics and stop")
+    g.add_argument("--dataset", help="HDF5: the dataset or group to read")
+    g.add_argument("--stamps", choices=["header", "bag"], help="ROS bags: header.stamp (default) or receive time")
+    g.add_argument("--delimiter", help="text files: the field delimiter (default: detected)")
+    t = p.add_argument_group("timing policies")
+    t.add_argument("--gaps", choices=["refuse", "split", "ignore"], default="refuse",
+                   help="missing samples: refuse (default, the message says where), split (analyse the longest"
+                        " gap-free segment) or ignore (analyse as if evenly spaced)")
+    t.add_argument("--gap-threshold", type=float, default=1.5, help="a gap is a step longer than this many"
+                                                                     " median steps (default 1.5)")
+    t.add_argument("--unsorted", choices=["sort", "refuse"], default="sort",
+                   help="timestamps going backwards: sort with a warning (default) or refuse")
+    t.add_argument("--duplicates", choices=["drop", "refuse"], default="drop",
+                   help="repeated timestamps: keep the first with a warning (default) or refuse")
+    u = p.add_argument_group("units (defaults: the file's, else gyro rad/s and accel m/s^2 as in ROS REP 103)")
+    u.add_argument("--gyro-unit", help="rad/s, mrad/s, deg/s, mdps, deg/h")
+    u.add_argument("--accel-unit", help="m/s^2, mm/s^2, g, mg, ug")
+    u.add_argument("--unit", action="append", default=[], metavar="CHANNEL=UNIT",
+                   help="unit of one channel (repeatable)")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error")
+
+
+def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str) -> None:
+    g = p.add_argument_group("analysis")
+    g.add_argument("--stat", default=default_stats,
+                   help=f"statistics, comma-separated (default {default_stats}); any of stdev, ostdev, adev, oadev,"
+                        " mdev, tdev, hdev, ohdev, totdev, mtotdev, ttotdev, htotdev, theo1, theobr, theoh, mtie,"
+                        " tierms")
+    g.add_argument("--taus", default="octave", help="τ grid: octave (default), decade, all, log")
+    g.add_argument("--confidence", type=float, default=0.6827, help="two-sided coverage of the intervals"
+                                                                     " (default 0.6827, ±1σ)")
+    g.add_argument("--workers", type=int, help="channels analysed at once (default: the cores)")
+
+
+def _read(args: argparse.Namespace, console: _Console) -> Any:
+    from . import io
+
+    columns: Any = None
+    if args.columns:
+        columns = [int(c) if c.strip().lstrip("-").isdigit() else c.strip() for c in args.columns.split(",")]
+    time_column: Any = args.time_column
+    if isinstance(time_column, str):
+        if time_column.lower() == "none":
+            time_column = False
+        elif time_column.isdigit():
+            time_column = int(time_column)
+    units: dict[str, str] = {}
+    if args.gyro_unit:
+        units["gyro"] = args.gyro_unit
+    if args.accel_unit:
+        units["accel"] = args.accel_unit
+    for spec in args.unit:
+        name, sep, unit = spec.partition("=")
+        if not sep or not name or not unit:
+            raise _UsageError(f"--unit {spec!r} must be CHANNEL=UNIT")
+        units[name.strip()] = unit.strip()
+    return io.read(args.log, format=args.format, columns=columns, time_column=time_column,
+                   time_unit=args.time_unit, rate=args.rate, data_type=args.data_type, units=units or None,
+                   topic=args.topic, dataset=args.dataset, stamps=args.stamps, gaps=args.gaps,
+                   gap_threshold=args.gap_threshold, unsorted=args.unsorted, duplicates=args.duplicates,
+                   delimiter=args.delimiter, progress=False if console.quiet else None)
+
+
+def _list_topics(args: argparse.Namespace) -> int:
+    from . import io
+
+    topics = io.list_topics(args.log)
+    for t in topics:
+        print(f"{t.topic}\t{t.msgtype}\t{t.count} messages")
+    return EXIT_OK
+
+
+def _figure_formats(args: argparse.Namespace) -> list[str]:
+    if args.no_figures:
+        return []
+    fmts = [f.strip().lower() for f in args.figures.split(",") if f.strip()]
+    return fmts
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("outputs")
+    g.add_argument("--out", help="output directory (default: <log name>-sigmatau); written atomically")
+    g.add_argument("--force", action="store_true", help="replace an existing output directory")
+    g.add_argument("--figures", default="png,svg", help="figure formats: png, svg, pdf (default png,svg)")
+    g.add_argument("--no-figures", action="store_true", help="no figures (and no figures in the report)")
+    g.add_argument("--no-report", action="store_true", help="no report.html")
+    m = p.add_argument_group("IMU model and Kalibr")
+    m.add_argument("--no-model", action="store_true", help="statistics only, no IMU noise model")
+    m.add_argument("--axis-rule", choices=["max", "rms", "mean"], default="max",
+                   help="how the three axes combine into the Kalibr values (default: the largest)")
+    m.add_argument("--inflate", type=float, default=1.0, help="inflation factor of the Kalibr values (default 1)")
+    m.add_argument("--rostopic", default="/imu0", help="rostopic written to imu.yaml (default /imu0)")
+    m.add_argument("--datasheet", action="append", default=[], metavar="PART|GROUP.TERM=VALUE UNIT",
+                   help="datasheet figures to compare and overlay: a part (lsm6dsl, lsm6dsm, adis16448, euroc) or"
+                        " a value such as 'gyro.N=4 mdps/sqrt(Hz)' (repeatable)")
+
+
+def _datasheet(specs: Sequence[str]) -> Any:
+    from .analysis import datasheet_reference
+
+    if not specs:
+        return None
+    merged: dict[str, dict[str, Any]] = {}
+    for spec in specs:
+        if "=" in spec:
+            key, _, value = spec.partition("=")
+            group, dot, term = key.strip().partition(".")
+            if not dot:
+                raise _UsageError(f"--datasheet {spec!r} must be PART or GROUP.TERM=VALUE UNIT")
+            merged.setdefault(group, {})[term.strip()] = value.strip()
+        else:
+            for group, terms in datasheet_reference(spec).items():
+                merged.setdefault(group, {}).update({t: v for t, v in terms.items()})
+    return merged
+
+
+def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Path) -> int:
+    from .analysis import analyze_log
+    from .outputs import write_outputs
+
+    analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
+                           model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
+                           rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
+                           progress=console.progress)
+    protect = [] if log.source.format == "memory" else [log.source.path]
+    files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
+                          report=not args.no_report, protect=protect)
+    print(analysis.summary())
+    print()
+    print(f"wrote {len(files)} files to {out}/: {', '.join(f.name for f in files)}")
+    return EXIT_OK
+
+
+def _check_out(args: argparse.Namespace, default: Path) -> Path:
+    """The output directory, checked before any long computation."""
+    from .outputs import FIGURE_FORMATS
+
+    out = Path(args.out) if args.out else default
+    if out.exists() and not args.force:
+        raise _UsageError(f"output directory {str(out)!r} exists; use --force to replace it")
+    if out.exists() and not out.is_dir():
+        raise _UsageError(f"--out {str(out)!r} exists and is not a directory")
+    for f in args.figures.split(","):
+        if f.strip().lower() not in FIGURE_FORMATS:
+            raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
+    if not (out.resolve().parent).is_dir():
+        raise _UsageError(f"--out {str(out)!r}: the parent directory does not exist")
+    if not 0 < args.confidence < 1:
+        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    return out
+
+
+# --------------------------------------------------------------------- commands
+
+
+def _cmd_analyze(args: argparse.Namespace, console: _Console) -> int:
+    if args.list_topics:
+        return _list_topics(args)
+    default = Path(Path(args.log).name.split(".")[0] + "-sigmatau")
+    out = _check_out(args, default)
+    log = _read(args, console)
+    return _run_analysis(log, args, console, out)
+
+
+def _simulated_imu(duration: float, rate: float, seed: int, *, gyro_unit: str = "rad/s",
+                   accel_unit: str = "m/s^2", spec: Optional[dict] = None) -> dict[str, Any]:
+    """Six channels simulated with :func:`sigmatau.imu.simulate`, independent seeded streams."""
     import numpy as np
 
-    import sigmatau
-    from sigmatau.datasets import nbs1000
+    from .imu import simulate
+    from .units import convert, term_unit
 
-    y = nbs1000()
-    results = [getattr(sigmatau, name)(y, rate=1.0, taus="octave") for name in _DEMO_STATS]
-    print("NBS 1000-point frequency test set (NIST SP 1065), rate 1 Hz, octave τ")
-    header = f"{'tau [s]':>8}" + "".join(f"{name:>13}" for name in _DEMO_STATS)
-    print(header)
-    taus = np.unique(np.concatenate([r.taus for r in results]))
-    for tau in taus:
-        cells = []
-        for r in results:
-            hit = np.flatnonzero(r.taus == tau)
-            cells.append(f"{r.dev[hit[0]]:13.6e}" if hit.size else f"{'':13}")
-        print(f"{tau:8g}" + "".join(cells))
-    return 0
+    spec = spec or DEMO_IMU
+    streams = np.random.SeedSequence(seed).spawn(6)
+    out: dict[str, Any] = {}
+    j = 0
+    for group, unit in (("gyro", gyro_unit), ("accel", accel_unit)):
+        s = spec.get(group)
+        if s is None:
+            continue
+        si = "rad/s" if group == "gyro" else "m/s^2"
+        coefs = {t: float(convert(v, term_unit(si, t), term_unit(unit, t))) for t, v in s.items() if t in "QNBKR"}
+        for axis in "xyz":
+            out[f"{group}_{axis}"] = simulate(s.get("preset"), duration=duration, rate=rate, unit=unit,
+                                              rng=np.random.default_rng(streams[j]), **coefs)
+            j += 1
+    return out
+
+
+def _cmd_demo(args: argparse.Namespace, console: _Console) -> int:
+    from .analysis import log_from_arrays
+
+    if args.duration <= 0 or args.rate <= 0:
+        raise _UsageError("--duration and --rate must be positive")
+    out = _check_out(args, Path("sigmatau-demo"))
+    n = int(round(args.duration * args.rate))
+    print(f"demo: simulating a 6-axis LSM6DSL-like IMU, {args.duration / 3600:.3g} h at {args.rate:g} Hz"
+          f" ({n:,} samples per axis, seed {args.seed})", file=sys.stderr)
+    channels = _simulated_imu(args.duration, args.rate, args.seed)
+    units = {k: ("rad/s" if k.startswith("gyro") else "m/s^2") for k in channels}
+    log = log_from_arrays(channels, rate=args.rate, units=units,
+                          name=f"demo: simulated LSM6DSL-like IMU, seed {args.seed}")
+    if not args.datasheet:
+        args.datasheet = ["lsm6dsl"]
+    return _run_analysis(log, args, console, out)
+
+
+def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
+    from .analysis import analyze_log
+    from .outputs import statistics_csv
+
+    if args.list_topics:
+        return _list_topics(args)
+    if not 0 < args.confidence < 1:
+        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    if args.csv and args.csv != "-" and Path(args.csv).exists() and not args.force:
+        raise _UsageError(f"{args.csv!r} exists; use --force to replace it")
+    log = _read(args, console)
+    a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
+                    workers=args.workers, progress=console.progress)
+    if args.csv:
+        text = statistics_csv(a)
+        if args.csv == "-":
+            sys.stdout.write(text)
+        else:
+            _atomic_write(Path(args.csv), text.encode())
+            print(f"wrote {args.csv}", file=sys.stderr)
+        return EXIT_OK
+    print(f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type} data,"
+          f" {a.settings['confidence']:.2%} intervals")
+    for ch in a.channels:
+        for stat, r in ch.results.items():
+            print()
+            print(f"{ch.name} [{ch.unit or '?'}] {stat.upper()}")
+            print(_stable32_table(r))
+        for stat, why in ch.skipped.items():
+            print(f"\n{ch.name} {stat.upper()}: not computed — {why}")
+    for w in a.warnings:
+        print(f"sigmatau: warning: {w}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _stable32_table(r: Any) -> str:
+    import math
+
+    rows = [["AF", "Tau", "#", "Alpha", "Min Sigma", "Sigma", "Max Sigma"]]
+    for i in range(len(r.taus)):
+        a = r.alpha[i] if r.alpha is not None else math.nan
+        lo = r.ci_low[i] if r.ci_low is not None else math.nan
+        hi = r.ci_high[i] if r.ci_high is not None else math.nan
+        rows.append([str(int(r.m[i])), f"{r.taus[i]:.4e}", str(int(r.n[i])), str(int(a)) if math.isfinite(a) else "-",
+                     f"{lo:.4e}" if math.isfinite(lo) else "-", f"{r.dev[i]:.4e}",
+                     f"{hi:.4e}" if math.isfinite(hi) else "-"])
+    widths = [max(len(row[j]) for row in rows) for j in range(len(rows[0]))]
+    return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in rows)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    """Write through a temporary file in the same directory and rename it into place."""
+    parent = path.resolve().parent
+    if not parent.is_dir():
+        raise _UsageError(f"{str(path)!r}: the directory does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".partial", dir=parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def _coef(text: Optional[str], group: str, term: str, unit: str) -> Optional[float]:
+    """A coefficient given as 'value [unit]', in the term's unit for samples in ``unit``."""
+    from .errors import SigmaTauError
+    from .units import convert, term_unit
+
+    if text is None:
+        return None
+    num, _, given = text.strip().partition(" ")
+    try:
+        value = float(num)
+    except ValueError:
+        raise _UsageError(f"--{group}-{term} {text!r} must be 'value [unit]', e.g. '4 mdps/sqrt(Hz)'") from None
+    target = term_unit(unit, term)
+    if not given.strip():
+        return value
+    try:
+        return float(convert(value, given.strip(), target))
+    except SigmaTauError as exc:
+        raise _UsageError(f"--{group}-{term} {text!r}: {exc}") from None
+
+
+def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
+    import numpy as np
+
+    from .imu import PRESETS
+
+    out = Path(args.output)
+    suffix = out.suffix.lower()
+    if suffix not in (".csv", ".npy", ".npz"):
+        raise _UsageError(f"output {str(out)!r} must end in .csv, .npy or .npz")
+    if out.exists() and not args.force:
+        raise _UsageError(f"{str(out)!r} exists; use --force to replace it")
+    if args.duration <= 0:
+        raise _UsageError(f"--duration {args.duration!r} must be positive")
+    if args.rate is not None and args.rate <= 0:
+        raise _UsageError(f"--rate {args.rate!r} must be positive")
+    n = int(round(args.duration * (args.rate or 1.0)))
+    if args.h:
+        return _simulate_power_law(args, out, suffix)
+    parts = sorted({k.rsplit("-", 1)[0] for k in PRESETS})
+    if args.preset not in parts and args.preset != "none":
+        raise _UsageError(f"--preset {args.preset!r}: choose from {', '.join(parts)} or none")
+    groups = [g.strip() for g in args.sensors.split(",") if g.strip()]
+    for g in groups:
+        if g not in ("gyro", "accel"):
+            raise _UsageError(f"--sensors: {g!r} is not gyro or accel")
+    rate = args.rate or (PRESETS[f"{args.preset}-gyro"].rate if args.preset != "none" else None)
+    if rate is None:
+        raise _UsageError("--rate is needed with --preset none")
+    spec: dict[str, dict] = {}
+    units = {"gyro": args.gyro_unit or "rad/s", "accel": args.accel_unit or "m/s^2"}
+    for g in groups:
+        s: dict[str, Any] = {"preset": None if args.preset == "none" else f"{args.preset}-{g}"}
+        si = "rad/s" if g == "gyro" else "m/s^2"
+        for t in "QNBKR":
+            v = _coef(getattr(args, f"{g}_{t}"), g, t, si)
+            if v is not None:
+                if v < 0:
+                    raise _UsageError(f"--{g}-{t} must not be negative")
+                s[t] = v
+        spec[g] = s
+    n = int(round(args.duration * rate))
+    if n < 2:
+        raise _UsageError(f"--duration {args.duration:g} s at {rate:g} Hz gives fewer than 2 samples")
+    chans = _simulated_imu(args.duration, rate, args.seed, gyro_unit=units["gyro"], accel_unit=units["accel"],
+                           spec=spec)
+    t = np.arange(n) / rate
+    if suffix == ".csv":
+        header = ["timestamp [s]"] + [f"{k} [{units[k.split('_')[0]]}]" for k in chans]
+        _write_csv(out, header, [t, *chans.values()])
+    elif suffix == ".npz":
+        _atomic_npz(out, {"timestamp": t, **chans, "rate": np.float64(rate)})
+    else:
+        _atomic_npy(out, np.column_stack(list(chans.values())))
+    print(f"wrote {out}: {len(chans)} channels ({', '.join(f'{k} [{units[k.split(chr(95))[0]]}]' for k in chans)})"
+          f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", file=sys.stderr)
+    if suffix == ".npy":
+        print(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
+              f" --rate {rate:g}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _simulate_power_law(args: argparse.Namespace, out: Path, suffix: str) -> int:
+    import numpy as np
+
+    from .generate import mixed_noise
+
+    levels: dict[int, float] = {}
+    for item in args.h.split(","):
+        key, sep, value = item.partition("=")
+        try:
+            alpha = int(key.strip().lower().lstrip("h"))
+            levels[alpha] = float(value)
+        except ValueError:
+            raise _UsageError(f"--h {args.h!r} must be like 'h0=1e-20,h-1=1e-23' (alpha = 2 … -4)") from None
+        if not sep or alpha not in (2, 1, 0, -1, -2, -3, -4):
+            raise _UsageError(f"--h: {item!r} must be hALPHA=VALUE with ALPHA in 2 … -4")
+    rate = args.rate or 1.0
+    n = int(round(args.duration * rate))
+    if n < 2:
+        raise _UsageError("--duration × --rate gives fewer than 2 samples")
+    y = mixed_noise(n, levels, rate=rate, data_type=args.data_type, rng=np.random.default_rng(args.seed))
+    name = "phase" if args.data_type == "phase" else "freq"
+    t = np.arange(n) / rate
+    if suffix == ".csv":
+        _write_csv(out, ["timestamp [s]", name], [t, y])
+    elif suffix == ".npz":
+        _atomic_npz(out, {"timestamp": t, name: y, "rate": np.float64(rate)})
+    else:
+        _atomic_npy(out, y)
+    print(f"wrote {out}: power-law {name} noise {args.h}, {n:,} samples at {rate:g} Hz, seed {args.seed}",
+          file=sys.stderr)
+    return EXIT_OK
+
+
+def _write_csv(path: Path, header: list[str], columns: list[Any]) -> None:
+    import io as _io
+
+    import numpy as np
+
+    buf = _io.StringIO()
+    np.savetxt(buf, np.column_stack(columns), delimiter=",", fmt="%.10g", header=",".join(header), comments="")
+    _atomic_write(path, buf.getvalue().encode())
+
+
+def _atomic_npy(path: Path, array: Any) -> None:
+    import io as _io
+
+    import numpy as np
+
+    buf = _io.BytesIO()
+    np.save(buf, array)
+    _atomic_write(path, buf.getvalue())
+
+
+def _atomic_npz(path: Path, arrays: dict) -> None:
+    import io as _io
+
+    import numpy as np
+
+    buf = _io.BytesIO()
+    np.savez(buf, **arrays)
+    _atomic_write(path, buf.getvalue())
+
+
+# ----------------------------------------------------------------------- parser
+
+_EPILOG_ERRORS = """
+exit codes: 0 success; 1 data error (missing, unreadable or corrupt file, no numeric data, too few
+samples); 2 usage error (bad option value, unknown column or topic, output exists); 3 internal error.
+"""
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="sigmatau",
-        description="Noise analysis of sensors with the Allan family of variances.",
+        description="Noise analysis of sensors (MEMS gyroscopes, accelerometers, clocks) with the Allan family"
+                    " of variances: AVAR, MVAR, TVAR, HVAR, total variances, Theo1/TheoBR/TheoH, noise"
+                    " identification, confidence intervals and the IMU noise model (ST DT0064).",
+        formatter_class=_Formatter,
+        epilog=textwrap.dedent("""
+            examples:
+              sigmatau demo                          simulate an IMU and write the full analysis to sigmatau-demo/
+              sigmatau analyze imu0/data.csv --out euroc
+              sigmatau analyze run.bag --topic /imu/data --gyro-unit rad/s --out run
+              sigmatau stats clock.txt --stat adev,mdev,theo1
+              sigmatau simulate imu.csv --preset lsm6dsl --duration 3600
+            """) + _EPILOG_ERRORS,
     )
     parser.add_argument("--version", action="version", version=f"sigmatau {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="run the built-in example and print a table")
-    demo.set_defaults(func=_demo)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+
+    demo = sub.add_parser(
+        "demo", help="simulate a 6-axis LSM6DSL-like IMU and run the full analysis (no input needed)",
+        formatter_class=_Formatter,
+        description="Simulate a 6-axis LSM6DSL-like IMU (datasheet noise densities as quoted in ST DT0064, plus"
+                    " an illustrative bias instability and random walk), seeded, and run the full analysis:"
+                    " statistics, noise identification, IMU model, figures, report.html and imu.yaml.",
+        epilog="examples:\n  sigmatau demo\n  sigmatau demo --out /tmp/demo --force --duration 1800\n" + _EPILOG_ERRORS)
+    demo.add_argument("--duration", type=float, default=7200.0, help="seconds simulated (default 7200, 2 h)")
+    demo.add_argument("--rate", type=float, default=104.0, help="sample rate in Hz (default 104, an LSM6DSL ODR)")
+    demo.add_argument("--seed", type=int, default=2017, help="random seed (default 2017)")
+    _add_analysis_options(demo, "oadev,mdev,tdev,ohdev,totdev,theoh")
+    _add_output_options(demo)
+    demo.set_defaults(out=None)
+    demo.add_argument("--quiet", action="store_true", help="no progress output")
+    demo.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    demo.set_defaults(func=_cmd_demo)
+
+    analyze = sub.add_parser(
+        "analyze", help="the full analysis of a log: statistics, noise types, IMU model, figures, report, imu.yaml",
+        formatter_class=_Formatter,
+        description="Read a log, check its timing, compute the statistics of every channel with noise types and"
+                    " intervals, fit the IMU noise model to gyro and accel channels, and write results.json, CSV"
+                    " tables, figures, report.html and imu.yaml (Kalibr) into the output directory.",
+        epilog=textwrap.dedent("""
+            examples:
+              sigmatau analyze imu0/data.csv                      EuRoC: units and timestamps from the header
+              sigmatau analyze log.csv --columns gx,gy,gz --gyro-unit deg/s --time-unit ms
+              sigmatau analyze run.bag --list-topics
+              sigmatau analyze rosbag2_dir --topic /imu --out run --force --figures png,svg,pdf
+              sigmatau analyze log.csv --datasheet lsm6dsl --axis-rule rms
+            """) + _EPILOG_ERRORS)
+    _add_input_options(analyze)
+    _add_analysis_options(analyze, "oadev,mdev,tdev,ohdev,totdev,theoh")
+    _add_output_options(analyze)
+    analyze.set_defaults(func=_cmd_analyze)
+
+    stats = sub.add_parser(
+        "stats", help="Stable32-like tables (AF, tau, n, alpha, min sigma, sigma, max sigma) per channel",
+        formatter_class=_Formatter,
+        description="Compute statistics with noise identification and intervals and print one table per channel"
+                    " and statistic, or write them all as CSV.",
+        epilog=textwrap.dedent("""
+            examples:
+              sigmatau stats phase.dat --data-type phase --rate 1 --stat adev,oadev,mdev,tdev
+              sigmatau stats imu.csv --stat oadev,theo1 --csv stats.csv
+            """) + _EPILOG_ERRORS)
+    _add_input_options(stats)
+    _add_analysis_options(stats, "oadev")
+    stats.add_argument("--csv", help="write every table to this CSV file ('-' for stdout) instead of printing")
+    stats.add_argument("--force", action="store_true", help="replace an existing CSV file")
+    stats.set_defaults(func=_cmd_stats)
+
+    sim = sub.add_parser(
+        "simulate", help="write a simulated log (IMU presets, explicit Q/N/B/K/R, or power-law h_alpha)",
+        formatter_class=_Formatter,
+        description="Write a seeded simulated log as CSV (with timestamps and units in the header), .npz or .npy."
+                    " IMU channels follow the five-term model (quantisation Q, white noise N, bias instability B,"
+                    " random walk K, ramp R) from a part's preset with any term overridden; --h writes one"
+                    " power-law noise channel instead.",
+        epilog=textwrap.dedent("""
+            examples:
+              sigmatau simulate imu.csv --preset lsm6dsl --duration 7200
+              sigmatau simulate gyro.csv --preset none --sensors gyro --rate 200 --gyro-N '0.2 deg/sqrt(h)' \\
+                  --gyro-B '3 deg/h' --gyro-K '1e-5'
+              sigmatau simulate clock.npy --h 'h0=1e-22,h-1=1e-26' --duration 100000 --rate 1
+            """) + _EPILOG_ERRORS)
+    sim.add_argument("output", help="file to write: .csv, .npz or .npy")
+    sim.add_argument("--preset", default="lsm6dsl", help="part: lsm6dsl (default), lsm6dsm, adis16448, euroc, none")
+    sim.add_argument("--sensors", default="gyro,accel", help="gyro, accel or both (default); three axes each")
+    sim.add_argument("--duration", type=float, default=3600.0, help="seconds (default 3600)")
+    sim.add_argument("--rate", type=float, help="Hz (default: the preset's)")
+    sim.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    sim.add_argument("--gyro-unit", help="unit of the gyro samples written (default rad/s)")
+    sim.add_argument("--accel-unit", help="unit of the accel samples written (default m/s^2)")
+    for g in ("gyro", "accel"):
+        for t, what in (("Q", "quantisation"), ("N", "white noise density"), ("B", "bias instability"),
+                        ("K", "random walk"), ("R", "ramp")):
+            sim.add_argument(f"--{g}-{t}", dest=f"{g}_{t}", metavar="'VALUE [UNIT]'",
+                             help=f"{g} {what} (SI when no unit)")
+    sim.add_argument("--h", help="power-law noise instead: levels like 'h0=1e-20,h-1=1e-23' (alpha 2 … -4)")
+    sim.add_argument("--data-type", choices=["freq", "phase"], default="freq", help="with --h: what to write")
+    sim.add_argument("--force", action="store_true", help="replace an existing file")
+    sim.add_argument("--quiet", action="store_true", help="no progress output")
+    sim.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    sim.set_defaults(func=_cmd_simulate)
     return parser
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Entry point of the ``sigmatau`` command; returns the exit code."""
-    parser = _parser()
-    args = parser.parse_args(argv)
-    from .errors import SigmaTauError
+    from .errors import DataError, ParameterError, SigmaTauError
+    from .io import InputNotFoundError, MissingDependencyError
+    from .outputs import OutputExistsError
 
+    parser = _parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = "--debug" in argv
     try:
-        return int(args.func(args))
-    except SigmaTauError as exc:
-        print(f"sigmatau: error: {exc}", file=sys.stderr)
-        return 1
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        print(str(exc), file=sys.stderr)
+        return EXIT_USAGE
+    except SystemExit as exc:  # --help, --version
+        return int(exc.code or 0)
+    if args.command is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    console = _Console(getattr(args, "quiet", False))
+    old_show = warnings.showwarning
+    warnings.showwarning = _showwarning
+    try:
+        return int(args.func(args, console))
+    except _UsageError as exc:
+        code, msg = EXIT_USAGE, str(exc)
+        if debug:
+            raise
+    except (ParameterError, OutputExistsError) as exc:
+        code, msg = EXIT_USAGE, str(exc)
+        if debug:
+            raise
+    except (DataError, InputNotFoundError, MissingDependencyError, SigmaTauError) as exc:
+        code, msg = EXIT_DATA, str(exc)
+        if debug:
+            raise
+    except OSError as exc:
+        code, msg = EXIT_DATA, f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc)
+        if debug:
+            raise
+    except BrokenPipeError:  # `sigmatau ... | head`: the reader left; not an error of ours
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        return EXIT_OK
+    except KeyboardInterrupt:
+        print("sigmatau: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # a bug: say so in one line, traceback with --debug
+        if debug:
+            raise
+        code, msg = EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)"
+    finally:
+        warnings.showwarning = old_show
+    print(f"sigmatau: error: {msg.splitlines()[0] if msg else 'failed'}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover
