@@ -430,3 +430,94 @@ def test_installed_entry_point(tmp_path):
     _one_line_error(out.stderr, "no such file")
     mod = subprocess.run([sys.executable, "-m", "sigmatau", "--version"], capture_output=True, text=True)
     assert mod.returncode == 0 and mod.stdout.strip() == f"sigmatau {__version__}"
+
+
+ADIS = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "imu" / "smac_imudata_adis16405" / \
+    "adis_16405_imu1.csv.gz"
+
+
+@pytest.mark.skipif(not ADIS.exists(), reason=f"{ADIS} not available (CC BY-NC-SA data, read in place only)")
+def test_analyze_real_adis16405_log(tmp_path, capsys):
+    """A real 1e6-row gzip CSV (no time column, units in the names): read in place, never copied."""
+    before = _digest(ADIS)
+    code, out, err = _run(["analyze", ADIS, "--out", tmp_path / "adis"], capsys)
+    assert code == 2
+    _one_line_error(err, "no time column and no rate", "--rate")
+    code, out, err = _run(["analyze", ADIS, "--rate", "100", "--gyro-unit", "deg/s", "--accel-unit", "g",
+                           "--stat", "oadev", "--no-figures", "--out", tmp_path / "adis"], capsys)
+    assert code == 0, err
+    assert _digest(ADIS) == before
+    assert "1000000 samples at 100 Hz" in out
+    assert "[quantized N]" in out  # the ADIS16405 accelerometers are quantised (std ≈ 1 LSB)
+    doc = yaml.safe_load((tmp_path / "adis" / "imu.yaml").read_text())
+    # ARW of the three gyros ≈ 2.4–2.6 °/√h (the largest is written): between 2 and 3 °/√h in rad/s/√Hz
+    arw = convert(doc["gyroscope_noise_density"], "rad/s/sqrt(Hz)", "deg/sqrt(h)")
+    assert 2.0 < arw < 3.0
+
+
+EUROC_HEADER = ("#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1],"
+                "a_RS_S_x [m s^-2],a_RS_S_y [m s^-2],a_RS_S_z [m s^-2]")
+
+
+def test_same_numbers_from_every_format(tmp_path, capsys):
+    """One 6-axis record written as EuRoC CSV, whitespace text, .npz, .npy, HDF5 and Parquet:
+    ``sigmatau stats --csv -`` gives identical tables."""
+    n, rate = 4000, 200.0
+    rng = np.random.default_rng(11)
+    v = rng.standard_normal((n, 6)) * 1e-3
+    t_ns = 1_403_636_579_758_555_392 + 5_000_000 * np.arange(n, dtype=np.int64)
+    files = {}
+    rows = "\n".join(f"{ti}," + ",".join(repr(float(x)) for x in r) for ti, r in zip(t_ns, v))
+    files["euroc"] = _write(tmp_path / "data.csv", EUROC_HEADER + "\n" + rows + "\n"), []
+    text = "\n".join(" ".join(repr(float(x)) for x in r) for r in v)
+    files["whitespace"] = _write(tmp_path / "plain.txt", "# gyro_x gyro_y gyro_z accel_x accel_y accel_z\n"
+                                 + text + "\n"), ["--rate", "200"]
+    names = ["gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"]
+    np.savez(tmp_path / "log.npz", rate=rate, **{k: v[:, j] for j, k in enumerate(names)})
+    files["npz"] = tmp_path / "log.npz", []
+    np.save(tmp_path / "log.npy", v)
+    files["npy"] = tmp_path / "log.npy", ["--rate", "200", "--columns", "0,1,2,3,4,5"]
+    try:
+        import h5py
+
+        with h5py.File(tmp_path / "log.h5", "w") as f:
+            g = f.create_group("imu")
+            g["gyro"] = v[:, :3]
+            g["accel"] = v[:, 3:]
+            g.attrs["rate"] = rate
+        files["hdf5"] = tmp_path / "log.h5", ["--dataset", "imu"]
+    except ImportError:
+        pass
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        pq.write_table(pa.table({"t": (t_ns - t_ns[0]) / 1e9, **{k: v[:, j] for j, k in enumerate(names)}}),
+                       tmp_path / "log.parquet")
+        files["parquet"] = tmp_path / "log.parquet", []
+    except ImportError:
+        pass
+    tables = {}
+    for kind, (path, extra) in files.items():
+        code, out, err = _run(["stats", path, "--stat", "oadev,mdev", "--csv", "-", *extra], capsys)
+        assert code == 0, (kind, err)
+        rows = list(csv.DictReader(out.splitlines()))
+        tables[kind] = {(r["statistic"], int(r["m"]), r["channel"] if not r["channel"].startswith("col")
+                         else names[int(r["channel"][3:])]): float(r["dev"]) for r in rows}
+    ref = tables.pop("euroc")
+    assert len(ref) > 50
+    for kind, table in tables.items():
+        assert set(table) == set(ref), kind
+        for key, dev in table.items():
+            assert dev == pytest.approx(ref[key], rel=1e-12), (kind, key)
+
+
+def test_datasheet_numbers_and_units(imu_csv, tmp_path, capsys):
+    code, out, err = _run(["analyze", imu_csv, "--out", tmp_path / "o", "--stat", "oadev", "--no-figures",
+                           "--datasheet", "gyro.N=0.24 deg/sqrt(h)", "--datasheet", "accel.N=80 ug/sqrt(Hz)"],
+                          capsys)
+    assert code == 0, err
+    assert "datasheet N = 0.24 deg/sqrt(h)" in out and "datasheet N = 80 ug/sqrt(Hz)" in out
+    code, _, err = _run(["analyze", imu_csv, "--out", tmp_path / "p", "--datasheet", "gyro.N=fast"], capsys)
+    assert code == 2
+    _one_line_error(err, "gyro.N")

@@ -337,7 +337,8 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
             raise ParameterError(f"time_unit={opts.time_unit!r} given but {display} has no time column")
         if rate is None:
             raise ParameterError(
-                f"{display}: no time column and no rate; pass rate= (Hz) or time_column="
+                f"{display}: no time column and no rate; give the rate in Hz (rate=, --rate) or the time"
+                f" column (time_column=, --time-column)"
                 f" (columns: {list_names(list(table.columns))})"
             )
         report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
