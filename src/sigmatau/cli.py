@@ -351,11 +351,18 @@ def _atomic_write(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
 
 
 def _coef(text: Optional[str], group: str, term: str, unit: str) -> Optional[float]:
@@ -615,6 +622,9 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--quiet", action="store_true", help="no progress output")
     sim.add_argument("--debug", action="store_true", help="show the traceback of an error")
     sim.set_defaults(func=_cmd_simulate)
+    from .batch import add_cli as _add_batch_cli  # `sigmatau batch`: parser and command live in sigmatau.batch
+
+    _add_batch_cli(sub)
     return parser
 
 

@@ -269,6 +269,9 @@ def write_outputs(
 
             _write_text(tmp / "report.html", render(analysis, figures=figs, folder=tmp, yaml_text=yaml_text,
                                                     figure_note=figure_note))
+        mask = os.umask(0)
+        os.umask(mask)
+        os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes 0700; give the folder the usual mode
         if out.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=parent))
             os.replace(target, old / "previous")
