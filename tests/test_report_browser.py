@@ -71,7 +71,7 @@ def test_report_renders_in_headless_chromium(tmp_path):
     assert len(images) == 8, images  # σ–τ of gyro and accel + a signal figure per channel
     for img in images:
         assert img["complete"] and img["w"] > 400 and img["h"] > 200 and img["shown"] > 100, img
-    assert {"input", "checks", "model", "kalibr", "figures", "tables", "settings"} <= set(sections)
+    assert {"overview", "input", "checks", "model", "kalibr", "figures", "tables", "settings"} <= set(sections)
     assert yaml_shown
     errors = [entry for entry in logs if entry.get("level") in ("SEVERE", "WARNING")]
     assert errors == []

@@ -96,6 +96,27 @@ def _checks_section(a: Any) -> str:
     return "".join(parts)
 
 
+def _overview_section(a: Any) -> str:
+    """One row per modelled channel: each term in its first customary unit, flags counted."""
+    models = [ch for ch in a.channels if ch.model is not None]
+    if not models:
+        return ""
+    rows = []
+    for ch in models:
+        m = ch.model
+        cells = []
+        for t in ("Q", "N", "B", "K", "R"):
+            p = getattr(m, t)
+            cust = p.customary()
+            cells.append(f"<td>{_param(cust[0] if cust else p.si())}</td>")
+        flags = sum(1 for f in m.flags if f.code != "not-resolved")
+        rows.append(f"<tr><td class='l'>{_e(ch.name)}</td>{''.join(cells)}<td>{flags}</td></tr>")
+    return ('<h2 id="overview">Overview</h2><p>The noise model of each channel in customary units; details, SI'
+            " values, read-offs and flags under <a href=\"#model\">Noise model</a>.</p><table><tr><th class='l'>"
+            "channel</th><th>Q</th><th>N</th><th>B</th><th>K</th><th>R</th><th>flags</th></tr>"
+            + "".join(rows) + "</table>")
+
+
 def _model_section(a: Any) -> str:
     models = [ch for ch in a.channels if ch.model is not None]
     out = ['<h2 id="model">Noise model</h2>']
@@ -203,7 +224,7 @@ def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path
     title = f"sigmatau report — {Path(a.log.source.path).name}"
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     nav = " · ".join(f'<a href="#{k}">{v}</a>' for k, v in
-                     (("input", "input"), ("checks", "data checks"), ("model", "noise model"),
+                     (("overview", "overview"), ("input", "input"), ("checks", "data checks"), ("model", "noise model"),
                       ("kalibr", "Kalibr"), ("figures", "figures"), ("tables", "statistics"),
                       ("settings", "settings")))
     settings = json.dumps(a.settings, indent=1, ensure_ascii=False)
@@ -213,7 +234,7 @@ def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path
         f"<title>{_e(title)}</title><style>{_CSS}</style></head><body>",
         f"<h1>{_e(title)}</h1>",
         f'<p class="muted">sigmatau {_e(a.version)}, {stamp}; analysis took {a.seconds:.1f} s. {nav}</p>',
-        _input_section(a), _checks_section(a), _model_section(a), _kalibr_section(a, yaml_text),
+        _overview_section(a), _input_section(a), _checks_section(a), _model_section(a), _kalibr_section(a, yaml_text),
         _figures_section(figures, folder, figure_note), _tables_section(a),
         f'<h2 id="settings">Settings</h2><pre>{_e(settings)}</pre>',
         "</body></html>",
