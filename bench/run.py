@@ -1,7 +1,8 @@
 """Benchmark sigmatau against allantools: times, speed-ups, agreement and peak memory.
 
 Run ``python bench/run.py`` (everything, 40-60 minutes on the 2-core reference
-machine), ``--quick`` (5-10 minutes, smaller sizes) or pick statistics and
+machine), ``--quick`` (5-10 minutes, smaller sizes), ``--tiny`` (the same plan on
+300-sample records: a smoke test of the command itself) or pick statistics and
 sizes with ``--stats`` and ``--sizes``. bench/README.md explains the method
 and every option; the results go to bench/results/ as Markdown and CSV.
 """
@@ -41,13 +42,21 @@ ALL_STATS = [
 ]
 NOISES = ("wfm", "wpm", "fpm", "ffm", "rwfm")
 
-#: Record lengths (frequency samples) of each target, full run and --quick.
+#: Record lengths (frequency samples) of each target: full run, --quick and --tiny.
 SIZES = {
     "full": {"classic": 10**6, "theo1_peer": 10**4, "theo1_own": 10**6, "total_peer": 10**4,
              "total_own": 10**6, "mtie": 10**6, "memory": 10**7},
     "quick": {"classic": 10**5, "theo1_peer": 10**3, "theo1_own": 10**5, "total_peer": 10**3,
               "total_own": 10**4, "mtie": 10**5, "memory": 10**5},
+    # Smoke test of the command (tests/test_bench.py): every target, nothing measured meaningfully.
+    "tiny": {"classic": 300, "theo1_peer": 300, "theo1_own": 300, "total_peer": 300,
+             "total_own": 300, "mtie": 300, "memory": 300},
 }
+
+
+def plan_mode(args: argparse.Namespace) -> str:
+    """Which SIZES row the target plan uses."""
+    return "tiny" if args.tiny else ("quick" if args.quick else "full")
 
 
 @dataclass(frozen=True)
@@ -196,7 +205,7 @@ def parse_stats(text: str) -> list[str]:
 
 def build_plan(args: argparse.Namespace) -> tuple[list[TimingCase], list[MemoryCase], dict[str, int]]:
     """Timing and memory cases for the options, and the size of each target."""
-    sizes = SIZES["quick" if args.quick else "full"]
+    sizes = SIZES[plan_mode(args)]
     wanted = set(args.stats) if args.stats else None
     cases: dict[tuple[str, int], TimingCase] = {}
 
@@ -489,7 +498,8 @@ class Report:
         return rows
 
     def markdown(self) -> str:
-        mode = "quick" if self.args.quick else ("custom" if self.args.sizes is not None or self.args.stats else "full")
+        mode = plan_mode(self.args) if (self.args.quick or self.args.tiny) else (
+            "custom" if self.args.sizes is not None or self.args.stats else "full")
         mi = self.machine
         out = [
             f"# sigmatau vs allantools — benchmark of {mi['date']}",
@@ -654,13 +664,13 @@ def write_atomic(path: Path, text: str) -> None:
         raise
 
 
-def output_paths(out: Optional[str], quick: bool) -> tuple[Path, Path]:
+def output_paths(out: Optional[str], mode: str) -> tuple[Path, Path]:
     if out and Path(out).suffix in (".md", ".csv"):
         stem = Path(out).with_suffix("")
     else:
         folder = Path(out) if out else HERE / "results"
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-        stem = folder / f"bench-{stamp}{'-quick' if quick else ''}"
+        stem = folder / f"bench-{stamp}{'' if mode == 'full' else '-' + mode}"
     return stem.with_suffix(".md"), stem.with_suffix(".csv")
 
 
@@ -730,15 +740,18 @@ def build_parser() -> argparse.ArgumentParser:
         description="Time sigmatau against allantools on the same seeded data, check that they agree,"
                     " measure peak memory, and write a Markdown and a CSV report.",
     )
-    p.add_argument("--quick", action="store_true",
-                   help="smaller sizes (see README): minutes instead of most of an hour")
+    size_mode = p.add_mutually_exclusive_group()
+    size_mode.add_argument("--quick", action="store_true",
+                           help="smaller sizes (see README): minutes instead of most of an hour")
+    size_mode.add_argument("--tiny", action="store_true",
+                           help="every target on 300-sample records: seconds; checks the command, not the code")
     p.add_argument("--stats", type=parse_stats, default=None,
                    help="comma-separated statistics to run (default: those of the targets)")
     p.add_argument("--sizes", type=parse_sizes, default=None,
                    help="comma-separated record lengths, e.g. 1e4,1e6: time every selected statistic"
                         " at each size instead of the target plan (memory only with --mem-size)")
     p.add_argument("--mem-size", type=lambda s: parse_sizes(s)[0], default=None,
-                   help="record length of the memory runs (default 1e7; 1e5 with --quick)")
+                   help="record length of the memory runs (default 1e7; 1e5 with --quick, 300 with --tiny)")
     p.add_argument("--no-memory", action="store_true", help="skip the memory runs")
     p.add_argument("--no-timing", action="store_true", help="skip the timing runs")
     p.add_argument("--no-peers", action="store_true", help="do not run allantools")
@@ -780,7 +793,7 @@ def main(argv: Optional[list[str]] = None) -> int:
         print("error: allantools is not installed (pip install allantools, or run with --no-peers)",
               file=sys.stderr)
         return 2
-    md_path, csv_path = output_paths(args.out, args.quick)
+    md_path, csv_path = output_paths(args.out, plan_mode(args))
 
     def save() -> None:
         write_atomic(md_path, report.markdown())

@@ -292,3 +292,61 @@ def test_filter_chain_rejects_bad_factor() -> None:
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ParameterError):
             fc.oavar([1.0, 2.0, 3.0], bad)
+
+
+# --- the carried window sums behind the frequency kernels ------------------------------
+
+
+def test_window_sums_follow_their_definition() -> None:
+    """WindowSums reaches every w through doublings, unit steps and restarts; every
+    route gives the plain sums A_w[j] = Σ y_j…y_{j+w-1} and B_w[j] = Σ A_w[j…j+w-1]."""
+    from sigmatau._numeric import WindowSums
+
+    rng = np.random.default_rng(11)
+    y = rng.standard_normal(97)
+    routes = [
+        [1, 2, 4, 8, 16, 32],  # octave: one doubling each
+        [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15],  # dense: unit steps, then restarts
+        [10, 20, 40, 5, 3, 48, 47, 1],  # prefix extensions, decreasing, restarts
+        [31, 32, 33, 30],
+    ]
+    for chunk in (None, 1, 4, 7):
+        for route in routes:
+            ws = WindowSums(y, double=True, chunk=chunk)
+            for w in route:
+                ws.advance(w)
+                a = np.lib.stride_tricks.sliding_window_view(y, w).sum(axis=1)
+                b = np.lib.stride_tricks.sliding_window_view(a, w).sum(axis=1)
+                np.testing.assert_allclose(ws.a, a, rtol=1e-13, atol=1e-13, err_msg=f"A, {route=} {w=} {chunk=}")
+                np.testing.assert_allclose(ws.b, b, rtol=1e-13, atol=1e-12, err_msg=f"B, {route=} {w=} {chunk=}")
+
+
+GRIDS = {
+    "octave": "octave",
+    "decade": "decade",
+    "all": "all",
+    "log": "log",
+}
+
+
+@pytest.mark.parametrize("grid", GRIDS)
+@pytest.mark.parametrize(("name", "noise"), cases())
+def test_chunked_kernels_on_every_grid(name: str, noise: str, grid: str, monkeypatch) -> None:
+    """Chunk boundaries everywhere (chunks of 5 samples) and every route through the
+    carried sums (the grids of the τ keywords): still the filter chain to RTOL."""
+    import sigmatau._numeric as numeric
+
+    monkeypatch.setattr(numeric, "CHUNK", 5)
+    spec = SPECS[name]
+    y = series(noise, 257, 4)
+    result = spec.fast(y, taus=GRIDS[grid], ci=None)
+    chain = np.array([spec.chain(y, int(m)) for m in result.m])
+    np.testing.assert_allclose(result.var, chain, rtol=RTOL, atol=0, err_msg=f"{name} {grid}")
+    x = to_phase_extended(y, 1.0)
+    sums = np.array([float(spec.sp1065(x, int(m), PHASE_DTYPE(1))) for m in result.m])
+    np.testing.assert_allclose(result.var, sums, rtol=SUMS_RTOL, atol=0)
+    # The phase kernels chunk their differences the same way.
+    xp = 3.0 + sigmatau.frequency_to_phase(y)
+    rp = spec.fast(xp, data_type="phase", taus=GRIDS[grid], ci=None)
+    chain = np.array([spec.chain(sigmatau.phase_to_frequency(xp), int(m)) for m in rp.m])
+    np.testing.assert_allclose(rp.var, chain, rtol=RTOL, atol=0, err_msg=f"{name} {grid} phase")

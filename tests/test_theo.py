@@ -346,7 +346,7 @@ def test_theoh_split():
 def test_theoh_nbs(monkeypatch):
     calls = []
     original = theo._kappa
-    monkeypatch.setattr(theo, "_kappa", lambda x: calls.append(1) or original(x))
+    monkeypatch.setattr(theo, "_kappa", lambda x, *a: calls.append(1) or original(x, *a))
     y = nbs1000()
     r = theo.theoh(y)
     assert len(calls) == 1  # κ once for the whole record
@@ -387,3 +387,72 @@ def test_timing_octave_is_fast():
     t = time.perf_counter()
     theo.theo1(y)
     assert time.perf_counter() - t < 10.0
+
+
+# --- Fast TheoBR: κ of the block-averaged record ---------------------------------------------
+
+
+def kappa_plain(x: np.ndarray) -> tuple[float, int]:
+    """κ by its definition (numerics.md §1.13) with the plain Theo1 and SP1065 OAVAR sums."""
+    N = x.size
+    n = N // 30 - 3
+    ratios = []
+    for i in range(n + 1):
+        m = 9 + 3 * i
+        d2 = x[2 * m :] - 2 * x[m:-m] + x[: -2 * m]
+        ratios.append(float(np.sum(d2 * d2)) / (2 * m * m * d2.size) / theo1_var_plain(x, 12 + 4 * i))
+    return float(np.mean(ratios)), n
+
+
+@pytest.mark.parametrize("noise", ["WPM", "FPM", "WFM", "FFM", "RWFM", "FWFM", "RRFM"])
+def test_fast_kappa_is_the_definition_on_block_averages(noise, monkeypatch):
+    # Threshold lowered so that the plain sums stay cheap: 1501 phase points, blocks of 6.
+    from _noise import NOISES
+
+    monkeypatch.setattr(theo, "KAPPA_FAST_POINTS", 300)
+    y = NOISES[noise](1500, np.random.default_rng([4, len(noise)]))
+    x = np.concatenate(([0.0], np.cumsum(y)))
+    b = -(-x.size // 300)
+    k = x.size // b
+    averaged = x[: k * b].reshape(k, b).mean(axis=1)
+    want, n = kappa_plain(averaged - np.polyval(np.polyfit(np.arange(k), averaged, 1), np.arange(k)))
+    if noise in ("WPM", "FPM"):  # fast κ is biased for phase noise, and says so
+        with pytest.warns(RangeWarning, match="phase noise"):
+            fast = theo.theobr_kappa(y)
+    else:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            fast = theo.theobr_kappa(y)
+    assert (fast.block, fast.n, fast.n_points) == (b, n, x.size) == (6, 5, 1501)
+    assert fast.kappa == pytest.approx(want, rel=ORACLE_RTOL)
+    exact = theo.theobr_kappa(y, method="exact")
+    want_exact, n_exact = kappa_plain(x)
+    assert (exact.block, exact.n) == (1, n_exact)
+    assert exact.kappa == pytest.approx(want_exact, rel=ORACLE_RTOL)
+
+
+def test_fast_kappa_reaches_theobr_and_theoh(monkeypatch):
+    monkeypatch.setattr(theo, "KAPPA_FAST_POINTS", 300)
+    y = np.random.default_rng(8).standard_normal(1500)
+    fast, exact = theo.theobr_kappa(y), theo.theobr_kappa(y, method="exact")
+    assert fast.kappa != exact.kappa
+    raw = theo.theo1(y, m=[10, 100]).var
+    r = theo.theobr(y, m=[10, 100])
+    assert r.bias == f"theobr kappa={fast.kappa:.6f} (n=5, fast: blocks of 6 points)"
+    np.testing.assert_allclose(r.var, fast.kappa * raw, rtol=1e-14)
+    r = theo.theobr(y, m=[10, 100], kappa="exact")
+    assert r.bias == f"theobr kappa={exact.kappa:.6f} (n=47)"
+    np.testing.assert_allclose(r.var, exact.kappa * raw, rtol=1e-14)
+    h = theo.theoh(y, kappa="exact")
+    np.testing.assert_allclose(h.bias_factor[h.m >= theo.theoh_split(1501)[1]], 1.0 / exact.kappa)
+    assert "fast: blocks of 6" in theo.theoh(y).bias
+    # Up to KAPPA_FAST_POINTS phase points the fast κ is the published one.
+    monkeypatch.setattr(theo, "KAPPA_FAST_POINTS", 1501)
+    assert theo.theobr_kappa(y) == exact
+    for bad in ("slow", None, 1.0):
+        with pytest.raises(ParameterError, match="kappa"):
+            theo.theobr(y, kappa=bad)
+        with pytest.raises(ParameterError, match="kappa"):
+            theo.theoh(y, kappa=bad)
+        with pytest.raises(ParameterError, match="method"):
+            theo.theobr_kappa(y, method=bad)

@@ -170,3 +170,22 @@ def test_errors():
         tie.tierms([np.nan, 1.0, 2.0])
     with pytest.warns(RangeWarning):
         tie.mtie(np.arange(10.0), data_type="phase", m=9)
+
+
+@pytest.mark.parametrize("chunk", [None, 3, 16])
+def test_mtie_octave_doubling_and_rebuilds_in_chunks(chunk, monkeypatch):
+    """The running extremes are carried by doubling along the octave grid and rebuilt
+    for other factors; with tiny chunks every chunk boundary is crossed."""
+    import sigmatau._numeric as numeric
+
+    if chunk is not None:
+        monkeypatch.setattr(numeric, "CHUNK", chunk)
+    rng = np.random.default_rng(21)
+    for x in (np.cumsum(rng.standard_normal(301)), rng.standard_normal(256), np.cumsum(np.cumsum(rng.standard_normal(130)))):
+        for ms in ([1, 2, 4, 8, 16, 32, 64, 128], [3, 6, 12, 24, 5, 10, 40, 7, 1], [x.size - 1, 1, x.size // 2]):
+            ms = np.array(ms)
+            got = tie._mtie_kernel(x, ms, 1.0)[0]
+            ref = np.array([mtie_plain(x, int(m)) for m in ms]) ** 2
+            np.testing.assert_array_equal(got, ref)
+        r = tie.mtie(x, data_type="phase", ci=None)
+        np.testing.assert_array_equal(r.dev, [mtie_plain(x, int(m)) for m in r.m])

@@ -12,7 +12,7 @@ from typing import Optional
 import numpy as np
 
 from ._driver import Statistic, run
-from ._numeric import block_means, sumsq, window_sums
+from ._numeric import WindowSums, centred_sumsq, sumsq, sumsq_combination
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .confidence import ONE_SIGMA
@@ -66,6 +66,10 @@ def _doc(func):
 
 
 # --- kernels: (phase x, factors, τ0) -> (variance, number of terms) ---------------
+#
+# Sums of squares go through sumsq_combination, which forms the differences chunk
+# by chunk: a record-sized temporary per τ costs more in page faults than the
+# arithmetic itself at N = 10^6.
 
 
 def _stdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
@@ -73,8 +77,9 @@ def _stdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         k = (x.size - 1) // m
-        means = np.diff(x[: k * m + 1 : m]) / (m * tau0)
-        var[i] = means.var(ddof=1)
+        xs = x[: k * m + 1 : m]
+        _, ss = centred_sumsq(xs[1:] - xs[:-1])
+        var[i] = ss / ((m * tau0) ** 2 * (k - 1))
         n[i] = k
     return var, n
 
@@ -82,10 +87,14 @@ def _stdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
 def _ostdvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
+    buf = np.empty(x.size - 1)
     for i, m in enumerate(ms):
-        means = (x[m:] - x[:-m]) / (m * tau0)
-        var[i] = means.var(ddof=1)
-        n[i] = means.size
+        k = x.size - m
+        means = buf[:k]
+        np.subtract(x[m:], x[:-m], out=means)
+        _, ss = centred_sumsq(means)
+        var[i] = ss / ((m * tau0) ** 2 * (k - 1))
+        n[i] = k
     return var, n
 
 
@@ -94,9 +103,9 @@ def _avar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         xs = x[: ((x.size - 1) // m) * m + 1 : m]
-        d2 = xs[2:] - 2.0 * xs[1:-1] + xs[:-2]
-        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
-        n[i] = d2.size
+        k = xs.size - 2
+        var[i] = sumsq_combination([(1.0, xs[2:]), (-2.0, xs[1:-1]), (1.0, xs[:-2])], k) / (2.0 * (m * tau0) ** 2 * k)
+        n[i] = k
     return var, n
 
 
@@ -104,9 +113,11 @@ def _oavar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
-        d2 = x[2 * m :] - 2.0 * x[m:-m] + x[: -2 * m]
-        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
-        n[i] = d2.size
+        k = x.size - 2 * m
+        var[i] = sumsq_combination([(1.0, x[2 * m :]), (-2.0, x[m:-m]), (1.0, x[: -2 * m])], k) / (
+            2.0 * (m * tau0) ** 2 * k
+        )
+        n[i] = k
     return var, n
 
 
@@ -138,51 +149,93 @@ def _tvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
 
 
 # --- kernels on frequency samples y (mean removed): no integration, so no phase
-# round-off; each is algebraically identical to its phase kernel above. ----------
+# round-off; each is algebraically identical to its phase kernel above. The
+# window sums A_m (and the double sums B_m of MVAR) are carried from one factor
+# to the next by WindowSums: one pass over the record per octave step. ----------
+
+
+def _block_sums_by_factor(y: np.ndarray, ms: np.ndarray):
+    """Yield ``(index, m, sums)`` over ``ms`` in increasing order; ``sums`` are the
+    ⌊M/m⌋ non-overlapped block sums of m samples from 0. Each factor that is a
+    power-of-two multiple of the previous one is reached by pairwise halving,
+    O(M/m) per step; any other is summed from the samples."""
+    prev_m, prev = 1, y
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        q, r = divmod(m, prev_m)
+        if r == 0 and q & (q - 1) == 0:
+            sums = prev
+            while q > 1:
+                k = sums.size // 2
+                sums = sums[0 : 2 * k : 2] + sums[1 : 2 * k : 2]
+                q //= 2
+        else:
+            k = y.size // m
+            sums = y[: k * m].reshape(k, m).sum(axis=1)
+        prev_m, prev = m, sums
+        yield i, m, sums
 
 
 def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
-    out = [block_means(y, int(m)) for m in ms]
-    return np.array([b.var(ddof=1) for b in out]), np.array([b.size for b in out])
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    for i, m, b in _block_sums_by_factor(y, ms):
+        _, ss = centred_sumsq(b)
+        var[i] = ss / (float(m) ** 2 * (b.size - 1))
+        n[i] = b.size
+    return var, n
 
 
 def _ostdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
-    out = [window_sums(y, int(m)) / m for m in ms]
-    return np.array([a.var(ddof=1) for a in out]), np.array([a.size for a in out])
+    var = np.empty(ms.size)
+    n = np.empty(ms.size, dtype=np.int64)
+    ws = WindowSums(y)
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        ws.advance(m)
+        _, ss = centred_sumsq(ws.a)
+        var[i] = ss / (float(m) ** 2 * (ws.a.size - 1))
+        n[i] = ws.a.size
+    return var, n
 
 
 def _avar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m in enumerate(ms):
-        d = np.diff(block_means(y, int(m)))
-        var[i] = sumsq(d) / (2.0 * d.size)
-        n[i] = d.size
+    for i, m, b in _block_sums_by_factor(y, ms):
+        k = b.size - 1
+        var[i] = sumsq_combination([(1.0, b[1:]), (-1.0, b[:-1])], k) / (2.0 * float(m) ** 2 * k)
+        n[i] = k
     return var, n
 
 
-def _oavar_sums(y: np.ndarray, m: int) -> np.ndarray:
-    """``Σ_{i=j}^{j+m-1} (y_{i+m} - y_i) = Δ²_m x_j / τ0`` for j = 0 … M-2m."""
-    return window_sums(y[m:] - y[:-m], m)
-
-
 def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    # Σ_{i=j}^{j+m-1} (y_{i+m} - y_i) = A_m[j+m] - A_m[j] = Δ²_m x_j / τ0, j = 0 … M-2m
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m in enumerate(ms):
-        s = _oavar_sums(y, int(m))
-        var[i] = sumsq(s) / (2.0 * m**2 * s.size)
-        n[i] = s.size
+    ws = WindowSums(y)
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        ws.advance(m)
+        a = ws.a
+        k = y.size - 2 * m + 1
+        var[i] = sumsq_combination([(1.0, a[m:]), (-1.0, a[:-m])], k) / (2.0 * float(m) ** 2 * k)
+        n[i] = k
     return var, n
 
 
 def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
+    # Σ_{k=j}^{j+m-1} (A_m[k+m] - A_m[k]) = B_m[j+m] - B_m[j], j = 0 … M-3m+1
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m in enumerate(ms):
-        t = window_sums(_oavar_sums(y, int(m)), int(m))
-        var[i] = sumsq(t) / (2.0 * float(m) ** 4 * t.size)
-        n[i] = t.size
+    ws = WindowSums(y, double=True)
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        ws.advance(m)
+        b = ws.b
+        k = y.size - 3 * m + 2
+        var[i] = sumsq_combination([(1.0, b[m:]), (-1.0, b[:-m])], k) / (2.0 * float(m) ** 4 * k)
+        n[i] = k
     return var, n
 
 

@@ -14,8 +14,8 @@ from ._driver import Statistic, run
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .confidence import ONE_SIGMA
-from ._numeric import block_means, sumsq, window_sums
-from .allan import _doc
+from ._numeric import WindowSums, sumsq_combination
+from .allan import _block_sums_by_factor, _doc
 from .result import StabilityResult
 
 __all__ = ["hdev", "ohdev"]
@@ -26,9 +26,10 @@ def _hvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
         xs = x[: ((x.size - 1) // m) * m + 1 : m]
-        d3 = xs[3:] - 3.0 * xs[2:-1] + 3.0 * xs[1:-2] - xs[:-3]
-        var[i] = sumsq(d3) / (6.0 * (m * tau0) ** 2 * d3.size)
-        n[i] = d3.size
+        k = xs.size - 3
+        terms = [(1.0, xs[3:]), (-3.0, xs[2:-1]), (3.0, xs[1:-2]), (-1.0, xs[:-3])]
+        var[i] = sumsq_combination(terms, k) / (6.0 * (m * tau0) ** 2 * k)
+        n[i] = k
     return var, n
 
 
@@ -36,31 +37,37 @@ def _ohvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
-        d3 = x[3 * m :] - 3.0 * x[2 * m : -m] + 3.0 * x[m : -2 * m] - x[: -3 * m]
-        var[i] = sumsq(d3) / (6.0 * (m * tau0) ** 2 * d3.size)
-        n[i] = d3.size
+        k = x.size - 3 * m
+        terms = [(1.0, x[3 * m :]), (-3.0, x[2 * m : -m]), (3.0, x[m : -2 * m]), (-1.0, x[: -3 * m])]
+        var[i] = sumsq_combination(terms, k) / (6.0 * (m * tau0) ** 2 * k)
+        n[i] = k
     return var, n
 
 
 def _hvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m in enumerate(ms):
-        b = block_means(y, int(m))
-        d = b[2:] - 2.0 * b[1:-1] + b[:-2]
-        var[i] = sumsq(d) / (6.0 * d.size)
-        n[i] = d.size
+    for i, m, b in _block_sums_by_factor(y, ms):
+        k = b.size - 2
+        var[i] = sumsq_combination([(1.0, b[2:]), (-2.0, b[1:-1]), (1.0, b[:-2])], k) / (6.0 * float(m) ** 2 * k)
+        n[i] = k
     return var, n
 
 
 def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
-    # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = Δ³_m x_j / τ0
+    # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = A_m[j+2m] - 2A_m[j+m] + A_m[j] = Δ³_m x_j / τ0
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m in enumerate(ms):
-        s = window_sums(y[2 * m :] - 2.0 * y[m:-m] + y[: -2 * m], int(m))
-        var[i] = sumsq(s) / (6.0 * m**2 * s.size)
-        n[i] = s.size
+    ws = WindowSums(y)
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        ws.advance(m)
+        a = ws.a
+        k = y.size - 3 * m + 1
+        var[i] = sumsq_combination([(1.0, a[2 * m :]), (-2.0, a[m:-m]), (1.0, a[: -2 * m])], k) / (
+            6.0 * float(m) ** 2 * k
+        )
+        n[i] = k
     return var, n
 
 

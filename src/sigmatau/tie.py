@@ -13,6 +13,7 @@ from typing import Optional
 import numpy as np
 
 from ._driver import Statistic, run
+from . import _numeric
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .allan import _doc
@@ -22,35 +23,90 @@ from .result import StabilityResult
 __all__ = ["mtie", "tierms"]
 
 
-def _window_extremes(x: np.ndarray, w: int) -> tuple[np.ndarray, np.ndarray]:
-    """Maximum and minimum of every window of ``w`` consecutive points, in O(N).
+class _RunningExtremes:
+    """Maximum and minimum of every window of m + 1 consecutive points, for growing m.
 
-    van Herk / Gil–Werman: cut the series into blocks of ``w``; a window starting
-    at i ends in the next block, so its extreme combines the running extreme
-    from i to the end of i's block with the running extreme from the start of
-    the next block to i + w - 1.
+    ``hi[i] = max(x_i … x_{i+m})`` and ``lo[i]`` likewise, for i = 0 … N-1-m,
+    are kept in two record-sized buffers. A factor twice the current one is
+    reached in place by the binary decomposition of Bregni & Maccabruni (a
+    window of 2m + 1 points is the union of two windows of m + 1 points sharing
+    their middle point), O(N) per octave; any other factor is built afresh by
+    van Herk / Gil–Werman running extremes, O(N), block row by block row.
+    Nothing else of the record's size is allocated.
     """
-    N = x.size
-    count = N - w + 1
-    nb = -(-N // w)
-    pad = nb * w - N
-    hi = np.concatenate((x, np.full(pad, -np.inf))).reshape(nb, w)
-    lo = np.concatenate((x, np.full(pad, np.inf))).reshape(nb, w)
-    pre_hi = np.maximum.accumulate(hi, axis=1).ravel()
-    suf_hi = np.maximum.accumulate(hi[:, ::-1], axis=1)[:, ::-1].ravel()
-    pre_lo = np.minimum.accumulate(lo, axis=1).ravel()
-    suf_lo = np.minimum.accumulate(lo[:, ::-1], axis=1)[:, ::-1].ravel()
-    wmax = np.maximum(suf_hi[:count], pre_hi[w - 1 : w - 1 + count])
-    wmin = np.minimum(suf_lo[:count], pre_lo[w - 1 : w - 1 + count])
-    return wmax, wmin
+
+    def __init__(self, x: np.ndarray, chunk: Optional[int] = None) -> None:
+        chunk = chunk or _numeric.CHUNK
+        self._x = x
+        self._chunk = chunk
+        self.hi = np.empty(x.size)
+        self.lo = np.empty(x.size)
+        self._tmp = np.empty(min(chunk, x.size))
+        self.m = 0
+
+    def advance(self, m: int) -> None:
+        q, r = divmod(m, self.m) if self.m else (0, 1)
+        if r == 0 and q >= 1 and q & (q - 1) == 0:
+            while self.m < m:
+                self._double()
+        else:
+            self._build(m)
+
+    def mtie(self) -> float:
+        """``max_i (hi[i] − lo[i])`` over the N − m windows."""
+        n = self._x.size - self.m
+        best = -np.inf
+        for lo in range(0, n, self._chunk):
+            hi = min(lo + self._chunk, n)
+            t = self._tmp[: hi - lo]
+            np.subtract(self.hi[lo:hi], self.lo[lo:hi], out=t)
+            best = max(best, float(t.max()))
+        return best
+
+    def _double(self) -> None:
+        m, C = self.m, self._chunk
+        n = self._x.size - 2 * m  # windows of 2m + 1 points
+        for arr, op in ((self.hi, np.maximum), (self.lo, np.minimum)):
+            for lo in range(0, n, C):
+                hi = min(lo + C, n)
+                if hi - lo <= m:
+                    op(arr[lo:hi], arr[lo + m : hi + m], out=arr[lo:hi])
+                else:
+                    t = self._tmp[: hi - lo]
+                    op(arr[lo:hi], arr[lo + m : hi + m], out=t)
+                    arr[lo:hi] = t
+        self.m = 2 * m
+
+    def _build(self, m: int) -> None:
+        x, w = self._x, m + 1
+        N = x.size
+        count = N - m
+        # Block rows of w points: a window starting in row r ends in row r + 1, so its
+        # extreme is max(suffix extreme of row r from i, prefix extreme of row r + 1 to i + m).
+        rows = max(1, self._chunk // w)
+        for s0 in range(0, count, rows * w):
+            nr = min(rows, -(-(count - s0) // w))  # rows of window starts in this group
+            seg = x[s0 : s0 + (nr + 1) * w]
+            for arr, acc, fill in ((self.hi, np.maximum, -np.inf), (self.lo, np.minimum, np.inf)):
+                blocks = np.full((nr + 1) * w, fill)
+                blocks[: seg.size] = seg
+                blocks = blocks.reshape(nr + 1, w)
+                suf = acc.accumulate(blocks[:-1, ::-1], axis=1)[:, ::-1]
+                pre = acc.accumulate(blocks[1:], axis=1)
+                ext = suf.copy()
+                acc(suf[:, 1:], pre[:, :-1], out=ext[:, 1:])
+                k = min(nr * w, count - s0)
+                arr[s0 : s0 + k] = ext.ravel()[:k]
+        self.m = m
 
 
 def _mtie_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     N = x.size
     var = np.empty(ms.size)
-    for k, m in enumerate(ms):
-        wmax, wmin = _window_extremes(x, int(m) + 1)
-        var[k] = float(np.max(wmax - wmin)) ** 2
+    ext = _RunningExtremes(x)
+    for k in np.argsort(ms, kind="stable"):
+        ext.advance(int(ms[k]))
+        var[k] = ext.mtie() ** 2
     return var, N - ms
 
 
