@@ -16,7 +16,7 @@ import numpy as np
 from ._input import as_series, check_data_type, check_rate, remove_linear_phase, to_phase
 from ._uncertainty import attach, check_options
 from .confidence import ONE_SIGMA
-from .errors import DataError
+from .errors import DataError, ParameterError
 from .result import StabilityResult
 from .taus import select_m
 
@@ -72,6 +72,12 @@ class Statistic:
     compute_freq: Optional[Kernel] = None
 
 
+def _is_chunked(data: object) -> bool:
+    """A ChunkedSeries or a dask array: computed piecewise by :mod:`sigmatau.chunked`, never loaded whole."""
+    module = type(data).__module__
+    return module == "sigmatau.chunked" or module.startswith("dask.")
+
+
 def _validated(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str, int]:
     """Validated ``(samples, rate, data_type, n_points)``; N = number of phase points."""
     rate_f = check_rate(rate)
@@ -98,6 +104,8 @@ def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> t
 
     The phase has its linear trend removed when the statistic is invariant to it.
     """
+    if _is_chunked(data):
+        raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
     series, rate_f, dtype, _ = _validated(stat, data, rate, data_type)
     return _phase_of(stat, series, rate_f, dtype), rate_f, dtype
 
@@ -123,6 +131,11 @@ def run(
     (:mod:`sigmatau._uncertainty`); ``raw=True`` skips that step for callers
     that attach it themselves (after a bias correction, for instance).
     """
+    if _is_chunked(data):
+        from .chunked import _run
+
+        return _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+                    alpha=alpha, confidence=confidence, ci=ci, raw=raw)
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     series, rate_f, dtype, n_points = _validated(stat, data, rate, data_type)
     given = series
@@ -181,6 +194,10 @@ def finish(result: StabilityResult, data: object, data_type: str, *, alpha: obje
            confidence: object = ONE_SIGMA, ci: object = "chi2",
            identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
     """Attach noise type, EDF and interval to a result built with ``run(..., raw=True)``."""
+    if _is_chunked(data):
+        from .chunked import _finish
+
+        return _finish(result, data, data_type, alpha=alpha, confidence=confidence, ci=ci, identified=identified)
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     given = as_series(data)
     return attach(result, given, data_type, alpha=alpha_i, confidence=conf, ci=ci_m,
