@@ -521,3 +521,18 @@ def test_datasheet_numbers_and_units(imu_csv, tmp_path, capsys):
     code, _, err = _run(["analyze", imu_csv, "--out", tmp_path / "p", "--datasheet", "gyro.N=fast"], capsys)
     assert code == 2
     _one_line_error(err, "gyro.N")
+
+
+def test_without_matplotlib_everything_but_the_figures_is_written(imu_csv, tmp_path, capsys, monkeypatch):
+    """`pip install sigmatau` without the plot extra: a warning names the extra, the rest is written."""
+    for name in [m for m in sys.modules if m == "matplotlib" or m.startswith("matplotlib.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import matplotlib -> ImportError
+    out = tmp_path / "o"
+    code, stdout, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev"], capsys)
+    assert code == 0, err
+    assert "sigmatau[plot]" in err and "warning" in err
+    names = {p.name for p in out.iterdir()}
+    assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} == names
+    html = (out / "report.html").read_text()
+    assert "Figures not made" in html and "sigmatau[plot]" in html
