@@ -1,0 +1,1444 @@
+"""Many logs at once on a Dask cluster: one task per log, per-log outputs and a fleet summary.
+
+:func:`analyze_many` runs the analysis of ``sigmatau analyze``
+(:func:`sigmatau.io.read`, :func:`sigmatau.analysis.analyze_log`,
+:func:`sigmatau.outputs.write_outputs`) on every log, one task per log, on a
+`dask.distributed <https://distributed.dask.org>`_ cluster: a
+``LocalCluster`` of single-threaded worker processes by default, or an
+existing cluster given by its scheduler address. Dask is the optional extra
+``dask`` (``pip install "sigmatau[dask]"``); ``import sigmatau`` does not load it.
+
+Layout of the output directory ``OUT``::
+
+    OUT/batch.json            settings of the run (the same on every rerun)
+    OUT/index.jsonl           one line per log as it finishes (append-only journal)
+    OUT/logs/<stem>-<sha12>/  the outputs of one log (results.json, CSVs, figures,
+                              report.html, imu.yaml) and record.json, its summary
+    OUT/fleet.csv             one row per log × channel × term: value, interval, limit, outlier
+    OUT/fleet_logs.csv        one row per log: status, verdict, outliers, error and reason
+    OUT/fleet.json            all of it, with the distribution of every term
+    OUT/fleet_hist.png, OUT/fleet_strip.png, OUT/fleet.html
+
+Resuming: a log's directory is named after the SHA-256 of its content and
+appears only complete (it is written under a hidden name and renamed into
+place, record.json included), so a rerun of the same command skips every log
+whose directory exists — whatever interrupted the previous run — and a task
+retried after a worker died keeps the one directory that got there first.
+
+On an existing cluster: the workers need sigmatau (with its ``dask`` extra)
+and must see the logs and ``OUT`` under the same paths (a shared file
+system); one thread per worker process suits this work (each task is one log)::
+
+    dask scheduler                                             # prints tcp://10.0.0.5:8786
+    dask worker tcp://10.0.0.5:8786 --nworkers 8 --nthreads 1  # on each machine
+    sigmatau batch '/data/line3/*.csv' --out /data/line3-fleet --scheduler tcp://10.0.0.5:8786
+
+or ``analyze_many(paths, out, client=distributed.Client("tcp://10.0.0.5:8786"))``.
+
+Examples
+--------
+>>> from sigmatau.batch import analyze_many                            # doctest: +SKIP
+>>> fleet = analyze_many(["line3/*.csv"], "fleet-out", workers=2, limits="lsm6dsl")  # doctest: +SKIP
+>>> fleet.summary()                                                    # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import base64
+import contextlib
+import csv
+import glob
+import hashlib
+import html
+import inspect
+import io as _io
+import json
+import math
+import os
+import shutil
+import socket
+import sys
+import time
+import uuid
+import warnings
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Callable, Mapping, Optional, Sequence, Union
+
+from . import __version__
+from .analysis import DEFAULT_STATISTICS, IMU_GROUPS, TERMS, _SI_TERM_UNITS, json_ready
+from .confidence import ONE_SIGMA
+from .errors import ParameterError, SigmaTauError
+
+__all__ = [
+    "analyze_many",
+    "expand_patterns",
+    "load_limits",
+    "FleetSummary",
+    "ClusterError",
+    "OUTLIER_Z",
+    "LIMIT_MARGIN",
+]
+
+#: Robust z-score (0.6745·|x − median|/MAD on log10 values) beyond which a term is an
+#: outlier of its fleet (Iglewicz & Hoaglin's 3.5).
+OUTLIER_Z = 3.5
+
+#: Factor applied to a datasheet preset's typical value to make it a limit: datasheets
+#: give typical, not maximum, noise densities, so about half of good parts exceed them.
+LIMIT_MARGIN = 1.5
+
+_RECORD = "record.json"
+_INDEX = "index.jsonl"
+_SETTINGS = "batch.json"
+_LOCK = "batch.lock"
+_LOGS = "logs"
+_SCHEMA = 1
+_HIST_TERMS = ("N", "B", "K")
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+class ClusterError(SigmaTauError):
+    """The Dask cluster could not be reached or started."""
+
+
+def _distributed() -> Any:
+    try:
+        import distributed
+    except ImportError:
+        from .io import MissingDependencyError
+
+        raise MissingDependencyError(
+            "batch analysis needs the optional packages dask and distributed, which are not installed;"
+            ' install them with: pip install "sigmatau[dask]"'
+        ) from None
+    return distributed
+
+
+# ------------------------------------------------------------------------- inputs
+
+
+def _is_bag_dir(p: Path) -> bool:
+    return p.is_dir() and (p / "metadata.yaml").is_file()
+
+
+def expand_patterns(patterns: Sequence[PathLike], *, exclude: Optional[PathLike] = None) -> list[str]:
+    """Absolute paths of the logs named by files, directories and glob patterns.
+
+    Patterns are expanded by Python (``*``, ``?``, ``[…]`` and ``**`` for any
+    depth), so they work the same on every shell, also when quoted. A ROS 2 bag
+    directory (one holding ``metadata.yaml``) is one log; other directories a
+    pattern matches are passed over, and a directory named literally is an error.
+    Paths inside ``exclude`` (the output directory) are left out; duplicates
+    are removed, the order is sorted.
+
+    Raises
+    ------
+    ParameterError
+        A pattern matches no log.
+    """
+    if isinstance(patterns, (str, os.PathLike)):
+        patterns = [patterns]
+    skip = Path(exclude).resolve() if exclude is not None else None
+    found: dict[str, None] = {}
+    for pat in patterns:
+        text = os.fspath(pat)
+        literal = not glob.has_magic(text)
+        if literal:
+            p = Path(text)
+            if p.is_dir() and not _is_bag_dir(p):
+                raise ParameterError(f"{text!r} is a directory, not a log (nor a ROS 2 bag); give files or a pattern"
+                                     f" such as {os.path.join(text, '*.csv')!r}")
+            # A missing literal path is kept: its task reports it like any unreadable log.
+            matches = [text]
+        else:
+            matches = [m for m in sorted(glob.glob(text, recursive=True))
+                       if Path(m).is_file() or _is_bag_dir(Path(m))]
+            if not matches:
+                raise ParameterError(f"pattern {text!r} matches no log")
+        for m in matches:
+            a = Path(os.path.abspath(m))
+            if skip is not None and (a.resolve() == skip or skip in a.resolve().parents):
+                continue
+            found[str(a)] = None
+    if not found:
+        raise ParameterError("no log to analyse")
+    return sorted(found)
+
+
+def _stem(path: str) -> str:
+    name = Path(path).name.split(".")[0] or "log"
+    return "".join(c if c.isalnum() or c in "-_" else "_" for c in name)[:60]
+
+
+def _file_sha256(path: Path) -> tuple[str, int]:
+    from .io._registry import file_sha256
+
+    return file_sha256(path)
+
+
+# ------------------------------------------------------------------- one log (task)
+
+
+def _error_kind(exc: BaseException) -> str:
+    """``usage`` or ``data`` as ``sigmatau analyze`` would exit (2 or 1); ``internal`` for a bug."""
+    from .outputs import OutputExistsError
+
+    if isinstance(exc, (ParameterError, OutputExistsError)):
+        return "usage"
+    if isinstance(exc, (SigmaTauError, OSError)):
+        return "data"
+    return "internal"
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, OSError) and not isinstance(exc, SigmaTauError) and exc.filename:
+        text = f"{exc.strerror or exc}: {exc.filename}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return text.strip().splitlines()[0] if text.strip() else type(exc).__name__
+
+
+def _error_record(path: str, exc: BaseException, *, sha256: Optional[str] = None, size: Optional[int] = None,
+                  seconds: float = 0.0) -> dict[str, Any]:
+    return {"schema": _SCHEMA, "status": "error", "path": path, "name": None, "sha256": sha256, "size": size,
+            "error": {"type": type(exc).__name__, "kind": _error_kind(exc), "message": _one_line(exc)},
+            "seconds": seconds, "version": __version__}
+
+
+def _record(analysis: Any, *, path: str, sha256: str, size: int, name: str, token: str,
+            warns: Sequence[str], seconds: float) -> dict[str, Any]:
+    """The small summary of one analysis that the fleet summary is built from (SI units)."""
+    log = analysis.log
+    channels = []
+    for ch in analysis.channels:
+        m = ch.model
+        terms = None
+        if m is not None:
+            terms = {}
+            for t in TERMS:
+                p = getattr(m, t).si()
+                terms[t] = {"value": p.value if p.resolved else None, "low": p.low, "high": p.high,
+                            "unit": p.unit, "resolved": bool(p.resolved), "method": p.method}
+        channels.append({"name": ch.name, "group": ch.group, "unit": ch.unit, "n_samples": ch.n_samples,
+                         "statistics": list(ch.results), "skipped": dict(ch.skipped), "terms": terms,
+                         "model_note": ch.model_note,
+                         "flags": [f._asdict() for f in m.flags] if m is not None else []})
+    k = analysis.kalibr
+    kalibr = None if k is None else {key: k[key] for key in (
+        "gyroscope_noise_density", "gyroscope_random_walk", "accelerometer_noise_density",
+        "accelerometer_random_walk", "bounds_used")}
+    return json_ready({
+        "schema": _SCHEMA, "status": "ok", "path": path, "name": name, "sha256": sha256, "size": size,
+        "format": log.source.format, "topic": log.source.topic, "rate": log.rate, "samples": len(log),
+        "duration_s": len(log) / log.rate, "data_type": log.data_type,
+        "confidence": analysis.settings["confidence"], "channels": channels, "kalibr": kalibr,
+        "kalibr_note": analysis.kalibr_note, "notes": list(analysis.notes),
+        "warnings": list(dict.fromkeys([*warns, *analysis.warnings])), "settings_token": token,
+        "seconds": seconds, "version": __version__,
+    })
+
+
+def _write_json(path: Path, data: Any, *, fsync: bool = True) -> None:
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
+    with open(tmp, "w", encoding="utf-8", newline="") as fh:
+        fh.write(json.dumps(data, indent=1, allow_nan=False, ensure_ascii=False) + "\n")
+        fh.flush()
+        if fsync:
+            os.fsync(fh.fileno())
+    os.replace(tmp, path)
+
+
+def _find_done(logs_dir: Path, sha256: str) -> Optional[Path]:
+    """The finished directory of the content ``sha256``, if any (whatever the file was called)."""
+    for d in logs_dir.glob(f"*-{sha256[:12]}"):
+        try:
+            rec = json.loads((d / _RECORD).read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        if rec.get("sha256") == sha256:
+            return d
+    return None
+
+
+def _publish(staging: Path, final: Path, force: bool) -> bool:
+    """Rename ``staging`` to ``final``; False when another attempt got there first (``staging`` removed)."""
+    if final.exists() and (force or not (final / _RECORD).is_file()):
+        trash = final.with_name(f".{final.name}.old-{uuid.uuid4().hex[:8]}")
+        try:
+            os.rename(final, trash)
+        except FileNotFoundError:
+            pass
+        else:
+            shutil.rmtree(trash, ignore_errors=True)
+    try:
+        os.rename(staging, final)  # atomic; refuses to replace a non-empty directory
+        return True
+    except OSError:
+        if (final / _RECORD).is_file():
+            shutil.rmtree(staging, ignore_errors=True)
+            return False
+        raise
+
+
+def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_kw: Mapping[str, Any],
+                 figures: Sequence[str], report: bool, force: bool, token: str) -> dict[str, Any]:
+    """One task: hash, skip when done, else read, analyse, write; a record, never an exception.
+
+    Idempotent: run twice (a retry after a worker died, or two paths with the same
+    content), one directory survives and both calls return its record.
+    """
+    from . import io
+    from .analysis import analyze_log
+    from .outputs import write_outputs
+
+    t0 = time.perf_counter()
+    folder = Path(logs_dir)
+    sha: Optional[str] = None
+    size: Optional[int] = None
+    try:
+        p = Path(path)
+        if not p.exists():
+            raise io.InputNotFoundError(f"{path}: no such file or directory")
+        sha, size = _file_sha256(p)
+        if not force:
+            done = _find_done(folder, sha)
+            if done is not None:
+                rec = json.loads((done / _RECORD).read_text(encoding="utf-8"))
+                return {**rec, "reused": True}
+        name = f"{_stem(path)}-{sha[:12]}"
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            log = io.read(path, progress=False, **read_kw)
+            analysis = analyze_log(log, workers=1, **analysis_kw)
+        warns = [f"{w.category.__name__}: {w.message}" for w in caught
+                 if not w.category.__name__.startswith("Imu")]
+        staging = folder / f".{name}.staging-{uuid.uuid4().hex[:8]}"
+        write_outputs(analysis, staging, figures=list(figures), report=report, protect=[path])
+        rec = _record(analysis, path=path, sha256=sha, size=size, name=name, token=token, warns=warns,
+                      seconds=time.perf_counter() - t0)
+        _write_json(staging / _RECORD, rec)
+        if not _publish(staging, folder / name, force):
+            rec = {**json.loads((folder / name / _RECORD).read_text(encoding="utf-8")), "reused": True}
+        return rec
+    except Exception as exc:  # every failure is a result: the other logs go on
+        return _error_record(path, exc, sha256=sha, size=size, seconds=time.perf_counter() - t0)
+
+
+# ----------------------------------------------------------------------- settings
+
+
+def _read_kwargs(read: Optional[Mapping[str, Any]]) -> dict[str, Any]:
+    """``read`` checked against :func:`sigmatau.io.read` before anything is submitted."""
+    from .io import _read as reader
+
+    kw = dict(read or {})
+    for bad in ("path", "progress"):
+        if bad in kw:
+            raise ParameterError(f"read option {bad!r} is set by the batch itself")
+    sig = inspect.signature(reader.read)
+    try:
+        bound = sig.bind("<path>", **kw)
+    except TypeError:
+        unknown = sorted(set(kw) - set(sig.parameters))
+        raise ParameterError(f"unknown read option(s) {', '.join(map(repr, unknown))}; sigmatau.io.read takes"
+                             f" {', '.join(k for k in sig.parameters if k not in ('path', 'progress'))}") from None
+    bound.apply_defaults()
+    full = dict(bound.arguments)
+    full.pop("path")
+    reader._options(**full)  # raises ParameterError naming a bad value
+    return kw
+
+
+def _analysis_kwargs(statistics: Any, taus: Any, confidence: float, model: bool, axis_rule: str, inflate: float,
+                     rostopic: str, datasheet: Any) -> dict[str, Any]:
+    from .analysis import _check_statistics, datasheet_reference
+
+    if axis_rule not in ("max", "rms", "mean"):
+        raise ParameterError(f"axis_rule={axis_rule!r} must be 'max', 'rms' or 'mean'")
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0 < confidence < 1:
+        raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
+    if not isinstance(taus, str):
+        import numpy as np
+
+        taus = [float(t) for t in np.asarray(taus, dtype=float).ravel()]
+    return {"statistics": list(_check_statistics(statistics)), "taus": taus, "confidence": float(confidence),
+            "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": str(rostopic),
+            "datasheet": {g: {t: list(v) for t, v in terms.items()}
+                          for g, terms in datasheet_reference(datasheet).items()} or None}
+
+
+def _check_settings(out: Path, settings: dict[str, Any], force: bool) -> str:
+    """Record the settings in ``OUT/batch.json``; refuse to mix results of other settings."""
+    token = hashlib.sha256(json.dumps(settings, sort_keys=True).encode()).hexdigest()[:16]
+    path = out / _SETTINGS
+    if path.is_file() and not force:
+        try:
+            old = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            old = {}
+        if old.get("token") != token:
+            was, now = old.get("settings", {}), settings
+            diff = [k for k in sorted(set(was) | set(now)) if was.get(k) != now.get(k)]
+            raise ParameterError(f"{str(out)!r} holds results of other settings (differing: {', '.join(diff)});"
+                                 " use --force-rerun to recompute them all, or another --out")
+    _write_json(path, {"token": token, "settings": settings})
+    return token
+
+
+class _Lock:
+    """``OUT/batch.lock``: one run per output directory at a time (a stale lock is taken over)."""
+
+    def __init__(self, out: Path) -> None:
+        self.path = out / _LOCK
+        self.held = False
+
+    def __enter__(self) -> "_Lock":
+        me = f"{socket.gethostname()} {os.getpid()}"
+        for _ in range(2):
+            try:
+                fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                try:
+                    host, pid = self.path.read_text().split()
+                    alive = host == socket.gethostname() and _pid_alive(int(pid))
+                except (OSError, ValueError):
+                    alive = False
+                if alive:
+                    raise ParameterError(f"another sigmatau batch (process {pid}) is writing to"
+                                         f" {str(self.path.parent)!r}; wait for it or use another --out") from None
+                self.path.unlink(missing_ok=True)
+                continue
+            with os.fdopen(fd, "w") as fh:
+                fh.write(me)
+            self.held = True
+            return self
+        raise ParameterError(f"cannot lock {str(self.path)!r}")
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.held:
+            self.path.unlink(missing_ok=True)
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _read_index(out: Path) -> dict[str, dict[str, Any]]:
+    """Latest journal entry per path; a line cut short by a crash is passed over."""
+    latest: dict[str, dict[str, Any]] = {}
+    try:
+        text = (out / _INDEX).read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return latest
+    for line in text.splitlines():
+        try:
+            e = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(e, dict) and "path" in e:
+            latest[e["path"]] = e
+    return latest
+
+
+class _Journal:
+    def __init__(self, out: Path) -> None:
+        self.fh = open(out / _INDEX, "a", encoding="utf-8")
+
+    def append(self, rec: Mapping[str, Any], stat: Optional[tuple[int, int]]) -> None:
+        entry = {"path": rec["path"], "status": rec["status"], "sha256": rec.get("sha256"), "name": rec.get("name"),
+                 "size": stat[0] if stat else None, "mtime_ns": stat[1] if stat else None,
+                 "reused": bool(rec.get("reused")), "error": rec.get("error"), "time": time.time()}
+        self.fh.write(json.dumps(entry, ensure_ascii=False) + "\n")
+        self.fh.flush()
+        os.fsync(self.fh.fileno())
+
+    def close(self) -> None:
+        self.fh.close()
+
+
+def _stat(path: str) -> Optional[tuple[int, int]]:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    if os.path.isdir(path):  # a ROS 2 bag: its newest file
+        times = [st.st_mtime_ns] + [q.stat().st_mtime_ns for q in Path(path).rglob("*") if q.is_file()]
+        return (sum(q.stat().st_size for q in Path(path).rglob("*") if q.is_file()), max(times))
+    return (st.st_size, st.st_mtime_ns)
+
+
+# ----------------------------------------------------------------------- progress
+
+
+class _Progress:
+    """A bar on a terminal, else one line per log; or a callable of the caller's."""
+
+    def __init__(self, total: int, mode: Any) -> None:
+        self.total, self.done, self.failed, self.reused = total, 0, 0, 0
+        self.t0 = time.perf_counter()
+        self.call = mode if callable(mode) else None
+        if self.call is not None:
+            self.mode = "call"
+        elif mode is None:
+            self.mode = "bar" if sys.stderr.isatty() else "none"
+        elif mode in ("bar", "lines", "none"):
+            self.mode = mode
+        else:
+            self.mode = "bar" if mode and sys.stderr.isatty() else ("lines" if mode else "none")
+
+    def update(self, rec: Mapping[str, Any]) -> None:
+        self.done += 1
+        self.failed += rec["status"] != "ok"
+        self.reused += bool(rec.get("reused"))
+        if self.mode == "call":
+            self.call(rec, self.done, self.total)  # type: ignore[misc]
+            return
+        if self.mode == "lines":
+            if rec.get("reused"):  # a rerun of thousands of logs: said once, at the end
+                return
+            what = ("done before" if rec.get("reused") else f"{rec.get('seconds', 0):.1f} s") if rec["status"] == "ok" \
+                else f"{rec['error']['type']}: {rec['error']['message']}"
+            print(f"[{self.done}/{self.total}] {rec['status']:<5} {rec['path']} ({what})", file=sys.stderr, flush=True)
+        elif self.mode == "bar":
+            width = 30
+            fill = int(width * self.done / max(self.total, 1))
+            el = time.perf_counter() - self.t0
+            eta = el / self.done * (self.total - self.done) if self.done else 0.0
+            print(f"\r[{'#' * fill}{'.' * (width - fill)}] {self.done}/{self.total} logs, {self.failed} failed,"
+                  f" {self.reused} done before, {el:.0f} s elapsed, ~{eta:.0f} s left ", end="", file=sys.stderr,
+                  flush=True)
+
+    def close(self) -> None:
+        if self.mode == "bar" and self.done:
+            print(file=sys.stderr, flush=True)
+        elif self.mode == "lines" and self.reused:
+            print(f"{self.reused} log(s) done before: skipped", file=sys.stderr, flush=True)
+
+
+# ------------------------------------------------------------------------ limits
+
+
+def load_limits(spec: Any, *, margin: float = LIMIT_MARGIN) -> dict[str, dict[str, dict[str, Any]]]:
+    """Upper limits of noise terms, in SI: ``{group: {term: {"max": float, "unit": str, "source": str}}}``.
+
+    Parameters
+    ----------
+    spec : str, path or mapping or None
+        A part with presets in :data:`sigmatau.imu.PRESETS` (``"lsm6dsl"`` …):
+        its typical datasheet figures × ``margin``; or a file — JSON or YAML
+        ``{"gyro": {"N": "6 mdps/sqrt(Hz)", "B": [1e-4, "rad/s"]}}``, or CSV
+        with the columns ``group, term, max, unit`` — whose values are the
+        limits as given; or such a mapping. A value without unit is SI.
+    margin : float
+        Factor applied to a preset's typical values (default 1.5); not to
+        limits given explicitly.
+    """
+    from .analysis import datasheet_reference
+    from .units import convert
+
+    if spec is None:
+        return {}
+    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not margin > 0:
+        raise ParameterError(f"margin={margin!r} must be a positive number")
+    raw: Mapping[str, Any]
+    factor, source = 1.0, "given"
+    if isinstance(spec, (str, os.PathLike)):
+        p = Path(spec)
+        if p.is_file():
+            raw, source = _limits_file(p), f"file {os.fspath(spec)}"
+        elif os.fspath(spec).lower().endswith((".json", ".yaml", ".yml", ".csv")):
+            raise ParameterError(f"limits file {os.fspath(spec)!r} does not exist")
+        else:
+            raw = datasheet_reference(os.fspath(spec))
+            factor, source = float(margin), f"datasheet {os.fspath(spec)} typical × {float(margin):g}"
+    elif isinstance(spec, Mapping):
+        raw = spec
+    else:
+        raise ParameterError(f"limits={spec!r} must be a part name, a file or a mapping group → term → value")
+    out: dict[str, dict[str, dict[str, Any]]] = {}
+    for group, terms in raw.items():
+        if group not in IMU_GROUPS:
+            raise ParameterError(f"limits: group {group!r} must be 'gyro' or 'accel'")
+        if not isinstance(terms, Mapping):
+            raise ParameterError(f"limits: {group!r} must map terms to values")
+        for term, value in terms.items():
+            if term not in TERMS:
+                raise ParameterError(f"limits: term {group}.{term} must be one of {', '.join(TERMS)}")
+            si = _SI_TERM_UNITS[group][term]
+            v, unit = _limit_value(value, f"{group}.{term}", si)
+            try:
+                v_si = float(convert(v, unit, si))
+            except SigmaTauError:
+                raise ParameterError(f"limits: {group}.{term} unit {unit!r} is not a unit of {si}") from None
+            out.setdefault(group, {})[term] = {"max": v_si * factor, "unit": si, "source": source,
+                                               "given": f"{v:g} {unit}" + (f" × {factor:g}" if factor != 1 else "")}
+    return out
+
+
+def _limit_value(value: Any, what: str, si: str) -> tuple[float, str]:
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        v, unit = float(value), si
+    elif isinstance(value, str):
+        num, _, unit = value.strip().partition(" ")
+        try:
+            v = float(num)
+        except ValueError:
+            raise ParameterError(f"limits: {what}={value!r} must be 'value unit', e.g. '6 mdps/sqrt(Hz)'") from None
+        unit = unit.strip() or si
+    elif isinstance(value, (list, tuple)) and len(value) == 2:
+        try:
+            v, unit = float(value[0]), str(value[1])
+        except (TypeError, ValueError):
+            raise ParameterError(f"limits: {what}={value!r} must be (value, unit)") from None
+    else:
+        raise ParameterError(f"limits: {what}={value!r} must be a number, 'value unit' or (value, unit)")
+    if not (math.isfinite(v) and v > 0):
+        raise ParameterError(f"limits: {what}={value!r} must be positive")
+    return v, unit
+
+
+def _limits_file(p: Path) -> dict[str, dict[str, Any]]:
+    text = p.read_text(encoding="utf-8")
+    suffix = p.suffix.lower()
+    if suffix == ".csv":
+        rows = list(csv.DictReader(_io.StringIO(text)))
+        need = {"group", "term", "max"}
+        if not rows or not need <= set(rows[0]):
+            raise ParameterError(f"limits file {str(p)!r}: CSV needs the columns group, term, max (and unit)")
+        data: dict[str, dict[str, Any]] = {}
+        for r in rows:
+            try:
+                v = float(r["max"])
+            except (TypeError, ValueError):
+                raise ParameterError(f"limits file {str(p)!r}: max={r['max']!r} is not a number") from None
+            unit = (r.get("unit") or "").strip()
+            data.setdefault(r["group"].strip(), {})[r["term"].strip()] = (v, unit) if unit else v
+        return data
+    if suffix in (".yaml", ".yml"):
+        try:
+            import yaml
+        except ImportError:
+            from .io import MissingDependencyError
+
+            raise MissingDependencyError("YAML limits need PyYAML; install it with: pip install pyyaml,"
+                                         " or give the limits as JSON or CSV") from None
+        data = yaml.safe_load(text)
+    else:
+        try:
+            data = json.loads(text)
+        except ValueError as exc:
+            raise ParameterError(f"limits file {str(p)!r} is not valid JSON: {exc}") from None
+    if not isinstance(data, Mapping):
+        raise ParameterError(f"limits file {str(p)!r} must map groups to terms to values")
+    return dict(data)
+
+
+# ------------------------------------------------------------------------- fleet
+
+
+@dataclass(frozen=True)
+class FleetSummary:
+    """What :func:`analyze_many` did and found.
+
+    Attributes
+    ----------
+    out : Path
+        The output directory.
+    records : tuple of dict
+        One per analysed log (each distinct content once), sorted by path:
+        ``path``, ``name`` (its directory under ``out/logs``), ``sha256``,
+        per channel the model terms in SI (``value``/``low``/``high``/
+        ``resolved``), flags, warnings; ``reused`` when taken from an
+        earlier run; ``verdict`` and ``outliers`` from the fleet summary.
+    errors : tuple of dict
+        One per log that failed: ``path`` and ``error`` (``type``, ``kind``
+        "data"/"usage"/"internal", one-line ``message``).
+    rows : tuple of dict
+        One per log × channel × term (the rows of ``fleet.csv``).
+    distribution : tuple of dict
+        Per group and term: counts, median, spread, limit, failures, outliers.
+    limits : dict
+        The limits applied (:func:`load_limits`).
+    computed, reused : int
+        Logs analysed in this run, and taken from an earlier one.
+    seconds : float
+        Wall time of the run.
+    files : tuple of Path
+        Fleet files written.
+    """
+
+    out: Path
+    records: tuple[dict, ...]
+    errors: tuple[dict, ...]
+    rows: tuple[dict, ...]
+    distribution: tuple[dict, ...]
+    limits: Mapping[str, Any]
+    computed: int
+    reused: int
+    seconds: float
+    files: tuple[Path, ...] = ()
+
+    @property
+    def ok(self) -> bool:
+        """True when every log was analysed."""
+        return not self.errors
+
+    def __repr__(self) -> str:
+        return (f"FleetSummary(out={str(self.out)!r}, logs={len(self.records)}, errors={len(self.errors)},"
+                f" computed={self.computed}, reused={self.reused}, seconds={self.seconds:.1f})")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (the content of ``fleet.json``)."""
+        return json_ready({
+            "tool": {"name": "sigmatau", "version": __version__},
+            "logs": len(self.records) + len(self.errors), "analysed": len(self.records), "failed": len(self.errors),
+            "computed": self.computed, "reused": self.reused, "seconds": self.seconds,
+            "limits": self.limits, "outlier_rule": _OUTLIER_RULE, "limit_rule": _LIMIT_RULE,
+            "distribution": list(self.distribution), "records": list(self.records), "errors": list(self.errors),
+        })
+
+    def summary(self) -> str:
+        """A few lines for the terminal: counts, verdicts, outliers, errors."""
+        n = len(self.records) + len(self.errors)
+        lines = [f"{n} log(s): {len(self.records)} analysed ({self.computed} now, {self.reused} done before),"
+                 f" {len(self.errors)} failed, in {self.seconds:.1f} s"]
+        if self.limits:
+            fails = [r for r in self.records if r.get("verdict") == "fail"]
+            lines.append(f"limits: {len(self.records) - len(fails)} pass, {len(fails)} fail")
+            lines += [f"  FAIL {r['path']}: {'; '.join(r['limit_failures'])}" for r in fails]
+        out = [r for r in self.records if r.get("outliers")]
+        if out:
+            lines.append(f"outliers against the fleet (|z| > {OUTLIER_Z:g}): {len(out)} log(s)")
+            lines += [f"  {r['path']}: {', '.join(r['outliers'])}" for r in out]
+        for e in self.errors:
+            lines.append(f"  ERROR {e['path']}: {e['error']['type']}: {e['error']['message']}")
+        return "\n".join(lines)
+
+
+_OUTLIER_RULE = (f"per group (gyro, accel; axes pooled) and term, over the resolved values of every log: robust"
+                 f" z = 0.6745·(log10 v − median)/MAD of log10 v; an outlier has |z| > {OUTLIER_Z:g} and an"
+                 " interval [low, high] that excludes the fleet median (needs ≥ 5 resolved values)")
+_LIMIT_RULE = ("a term passes when its estimate is ≤ the limit; a term the record does not resolve passes only when"
+               " its upper bound is ≤ the limit; a log passes when every limited term of every channel passes,"
+               " and is 'untested' when it has no model to test")
+
+
+def _rows(records: Sequence[dict], limits: Mapping[str, Any]) -> list[dict[str, Any]]:
+    rows = []
+    for rec in records:
+        for ch in rec["channels"]:
+            if not ch.get("terms"):
+                continue
+            for t in TERMS:
+                p = ch["terms"][t]
+                lim = limits.get(ch["group"], {}).get(t)
+                verdict = ""
+                if lim is not None:
+                    x = p["value"] if p["resolved"] else p["high"]
+                    verdict = "pass" if x is not None and x <= lim["max"] else "fail"
+                rows.append({"path": rec["path"], "log": rec["name"], "sha256": rec["sha256"],
+                             "channel": ch["name"], "group": ch["group"], "term": t, "unit": p["unit"],
+                             "value": p["value"], "low": p["low"], "high": p["high"], "resolved": p["resolved"],
+                             "method": p["method"], "z": None, "outlier": False,
+                             "limit": lim["max"] if lim else None, "verdict": verdict})
+    return rows
+
+
+def _outliers_and_distribution(rows: list[dict], limits: Mapping[str, Any], z_max: float) -> list[dict]:
+    import numpy as np
+
+    dist = []
+    keys = sorted({(r["group"], r["term"]) for r in rows}, key=lambda k: (IMU_GROUPS.index(k[0])
+                                                                           if k[0] in IMU_GROUPS else 9,
+                                                                           TERMS.index(k[1])))
+    for group, term in keys:
+        sel = [r for r in rows if r["group"] == group and r["term"] == term]
+        res = [r for r in sel if r["resolved"] and r["value"] is not None and r["value"] > 0]
+        lx = np.log10([r["value"] for r in res]) if res else np.array([])
+        med = float(np.median(lx)) if lx.size else math.nan
+        mad = float(np.median(np.abs(lx - med))) if lx.size else math.nan
+        n_out = 0
+        if lx.size >= 5 and mad > 0:
+            for r, v in zip(res, lx):
+                r["z"] = 0.6745 * (v - med) / mad
+                excludes = not (r["low"] <= 10**med <= r["high"])
+                r["outlier"] = bool(abs(r["z"]) > z_max and excludes)
+                n_out += r["outlier"]
+        lim = limits.get(group, {}).get(term)
+        values = [r["value"] for r in res]
+        dist.append({"group": group, "term": term, "unit": sel[0]["unit"], "channels": len(sel),
+                     "logs": len({r["sha256"] for r in sel}), "resolved": len(res), "bounds": len(sel) - len(res),
+                     "median": 10**med if lx.size else None, "min": min(values) if values else None,
+                     "max": max(values) if values else None,
+                     "p05": float(10 ** np.percentile(lx, 5)) if lx.size else None,
+                     "p95": float(10 ** np.percentile(lx, 95)) if lx.size else None,
+                     "spread_factor": 10 ** (1.4826 * mad) if lx.size and math.isfinite(mad) else None,
+                     "outliers": n_out, "limit": lim["max"] if lim else None,
+                     "fail": sum(r["verdict"] == "fail" for r in sel),
+                     "pass": sum(r["verdict"] == "pass" for r in sel)})
+    return dist
+
+
+def _annotate(records: list[dict], rows: list[dict], limits: Mapping[str, Any]) -> None:
+    """Per log: verdict against the limits, the limit failures and the outlier terms."""
+    by_log: dict[str, list[dict]] = {}
+    for r in rows:
+        by_log.setdefault(r["sha256"], []).append(r)
+    for rec in records:
+        mine = by_log.get(rec["sha256"], [])
+        rec["outliers"] = [f"{r['channel']}.{r['term']} (z {r['z']:+.1f})" for r in mine if r["outlier"]]
+        rec["limit_failures"] = [
+            f"{r['channel']}.{r['term']} {'= ' + format(r['value'], '.4g') if r['resolved'] else '< ' + format(r['high'] or math.inf, '.4g')}"
+            f" > {r['limit']:.4g} {r['unit']}" for r in mine if r["verdict"] == "fail"]
+        if limits:
+            tested = [r for r in mine if r["verdict"]]
+            rec["verdict"] = "fail" if rec["limit_failures"] else ("pass" if tested else "untested")
+        else:
+            rec["verdict"] = ""
+
+
+def _g(v: Any) -> str:
+    if v is None or isinstance(v, bool):
+        return "" if v is None else str(v)
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ""
+    return str(v)
+
+
+def _csv_text(header: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> str:
+    buf = _io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    for r in rows:
+        w.writerow([_g(r.get(h)) for h in header])
+    return buf.getvalue()
+
+
+def _write_text(path: Path, text: Union[str, bytes]) -> None:
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
+    tmp.write_bytes(text.encode("utf-8") if isinstance(text, str) else text)
+    os.replace(tmp, path)
+
+
+_ROW_COLUMNS = ("path", "log", "sha256", "channel", "group", "term", "unit", "value", "low", "high", "resolved",
+                "method", "z", "outlier", "limit", "verdict")
+_LOG_COLUMNS = ("path", "status", "log", "sha256", "size", "format", "rate", "duration_s", "verdict", "outliers",
+                "limit_failures", "warnings", "error_type", "error_kind", "error_message", "seconds", "reused")
+
+
+def _log_rows(records: Sequence[dict], errors: Sequence[dict]) -> list[dict]:
+    out = []
+    for r in [*records, *errors]:
+        e = r.get("error") or {}
+        out.append({**{k: r.get(k) for k in _LOG_COLUMNS}, "log": r.get("name"),
+                    "outliers": "; ".join(r.get("outliers", [])), "limit_failures": "; ".join(r.get("limit_failures", [])),
+                    "warnings": len(r.get("warnings", [])), "error_type": e.get("type"), "error_kind": e.get("kind"),
+                    "error_message": e.get("message"), "reused": bool(r.get("reused"))})
+    return sorted(out, key=lambda r: r["path"])
+
+
+def _fleet_figures(rows: Sequence[dict], limits: Mapping[str, Any]) -> dict[str, bytes]:
+    """Histograms and a strip plot with intervals of N, B, K per group (PNG bytes)."""
+    import numpy as np
+
+    from . import plots
+    from .units import pretty
+
+    plots._mpl()  # MissingDependencyError naming the extra when matplotlib is missing
+    from matplotlib.ticker import LogLocator, NullLocator
+
+    groups = [g for g in IMU_GROUPS if any(r["group"] == g for r in rows)]
+    if not groups:
+        return {}
+    out = {}
+    logs = sorted({r["path"] for r in rows})
+    pos = {p: i for i, p in enumerate(logs)}
+    axis_colors = {"x": "#0072B2", "y": "#E69F00", "z": "#009E73"}
+    for kind in ("hist", "strip"):
+        fig = plots._new_figure((4.0 * len(_HIST_TERMS), 3.0 * len(groups) + 0.4))
+        axes = fig.subplots(len(groups), len(_HIST_TERMS), squeeze=False)
+        for i, g in enumerate(groups):
+            for j, t in enumerate(_HIST_TERMS):
+                ax = axes[i][j]
+                sel = [r for r in rows if r["group"] == g and r["term"] == t]
+                res = [r for r in sel if r["resolved"] and r["value"]]
+                lim = limits.get(g, {}).get(t)
+                unit = pretty(sel[0]["unit"]) if sel else ""
+                ax.set_title(f"{g} {t} [{unit}]", fontsize=9)
+                ax.tick_params(labelsize=8)
+                ax.grid(True, color="0.88", linewidth=0.5)
+                if kind == "hist":
+                    if res:
+                        ax.set_xscale("log")
+                        v = np.array([r["value"] for r in res])
+                        lo, hi = v.min(), v.max()
+                        if lim:
+                            lo, hi = min(lo, lim["max"]), max(hi, lim["max"])
+                        bins = np.logspace(np.log10(lo) - 0.05, np.log10(hi) + 0.05, 25)
+                        ax.hist(v, bins=bins, color="#56B4E9", edgecolor="#0072B2", linewidth=0.6)
+                        ax.axvline(float(np.median(v)), color="black", linewidth=1.0, label="median")
+                        bad = [r["value"] for r in res if r["outlier"]]
+                        if bad:
+                            ax.plot(bad, [0] * len(bad), "v", color="#D55E00", markersize=7, clip_on=False,
+                                    label="outlier")
+                    else:
+                        ax.text(0.5, 0.5, "not resolved in any log", ha="center", va="center",
+                                transform=ax.transAxes, fontsize=8, color="0.4")
+                        ax.set_xticks([])
+                        ax.set_yticks([])
+                        lim = None
+                    ax.set_xlabel(f"{t} [{unit}]", fontsize=8)
+                    ax.set_ylabel("channels", fontsize=8)
+                else:
+                    ax.set_yscale("log")
+                    for letter, color in axis_colors.items():  # one call per axis: thousands of logs stay fast
+                        mine = [r for r in sel if r["channel"].rsplit("_", 1)[-1] == letter or
+                                (letter == "x" and r["channel"].rsplit("_", 1)[-1] not in axis_colors)]
+                        shift = {"x": -0.2, "y": 0.0, "z": 0.2}[letter]
+                        good = [r for r in mine if r["resolved"] and r["value"]]
+                        if good:
+                            x = np.array([pos[r["path"]] for r in good]) + shift
+                            v = np.array([r["value"] for r in good])
+                            lo = np.array([max(r["low"], r["value"] / 100) for r in good])
+                            hi = np.array([r["high"] if math.isfinite(r["high"]) else r["value"] for r in good])
+                            ax.errorbar(x, v, yerr=np.clip([v - lo, hi - v], 0, None), fmt="o", color=color, markersize=3,
+                                        elinewidth=0.8, linestyle="none")
+                            bad = [(xi, r["value"]) for xi, r in zip(x, good) if r["outlier"]]
+                            if bad:
+                                ax.plot(*zip(*bad), "o", mfc="none", mec="#D55E00", markersize=9, mew=1.2,
+                                        linestyle="none")
+                        bounds = [r for r in mine if not r["resolved"] and r["high"] and math.isfinite(r["high"])]
+                        if bounds:
+                            ax.plot(np.array([pos[r["path"]] for r in bounds]) + shift, [r["high"] for r in bounds],
+                                    "v", color=color, markersize=4, alpha=0.6, linestyle="none")
+                    ax.set_xlabel("log (sorted by path); ▼ upper bound, not resolved", fontsize=8)
+                    ax.set_xlim(-0.8, len(logs) - 0.2)
+                if lim:
+                    (ax.axvline if kind == "hist" else ax.axhline)(lim["max"], color="#D55E00", linestyle="--",
+                                                                   linewidth=1.0, label="limit")
+                if kind == "hist" and ax.get_legend_handles_labels()[0]:
+                    ax.legend(fontsize=7, frameon=False)
+        fig.suptitle("Fleet distribution of the noise terms" if kind == "hist" else
+                     "Noise terms per log with intervals (colour: x, y, z axis)", fontsize=10)
+        for ax in fig.axes:  # minor log ticks over many decades make the layout slow
+            for axis in (ax.xaxis, ax.yaxis):
+                if axis.get_scale() == "log":
+                    axis.set_major_locator(LogLocator(numticks=6))
+                    axis.set_minor_locator(NullLocator())
+        out[f"fleet_{kind}"] = plots.figure_to_bytes(fig, "png")
+    return out
+
+
+_CSS = """
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;margin:0 auto;
+max-width:1200px;padding:0 1.5em 3em;color:#1d1d1f;line-height:1.45}
+h1{font-size:1.6em;margin:1.2em 0 .2em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc}
+table{border-collapse:collapse;margin:.5em 0;font-size:.86em}
+th,td{border:1px solid #d0d0d0;padding:.2em .5em;text-align:right;vertical-align:top}
+th{background:#f2f2f2}td.l,th.l{text-align:left}
+figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
+.fail{color:#a00;font-weight:600}.pass{color:#185c18}.muted{color:#666}.flag{color:#8a4b00}
+"""
+
+
+def _h(text: Any) -> str:
+    return html.escape(str(text), quote=True)
+
+
+def _n(v: Any, fmt: str = ".4g") -> str:
+    return "–" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(float(v), fmt)
+
+
+def _fleet_html(fleet: FleetSummary, figs: Mapping[str, bytes], figure_note: str) -> str:
+    from .units import pretty
+
+    recs, errs = fleet.records, fleet.errors
+    n = len(recs) + len(errs)
+    fails = [r for r in recs if r.get("verdict") == "fail"]
+    parts = ["<!DOCTYPE html>", '<html lang="en"><head><meta charset="utf-8">',
+             '<meta name="viewport" content="width=device-width, initial-scale=1">',
+             f"<title>sigmatau fleet report — {n} logs</title><style>{_CSS}</style></head><body>",
+             f"<h1>sigmatau fleet report — {n} logs</h1>",
+             f'<p class="muted">sigmatau {_h(__version__)}; {len(recs)} analysed ({fleet.computed} in this run,'
+             f" {fleet.reused} done before), {len(errs)} failed; {fleet.seconds:.1f} s."
+             ' <a href="#dist">distribution</a> · <a href="#figures">figures</a> · <a href="#limits">limits</a> ·'
+             ' <a href="#outliers">outliers</a> · <a href="#errors">errors</a> · <a href="#logs">logs</a></p>']
+    parts.append('<h2 id="dist">Distribution across the fleet</h2>'
+                 "<p>SI units; values of resolved terms only (bounds counted apart); spread ×/÷ is 10^(1.4826·MAD)"
+                 " of log10 values.</p><table><tr><th class=l>group</th><th>term</th><th class=l>unit</th>"
+                 "<th>logs</th><th>resolved</th><th>bounds</th><th>median</th><th>spread ×/÷</th><th>5 %</th>"
+                 "<th>95 %</th><th>min</th><th>max</th><th>limit</th><th>fail</th><th>outliers</th></tr>")
+    for d in fleet.distribution:
+        parts.append(f"<tr><td class=l>{_h(d['group'])}</td><td>{_h(d['term'])}</td><td class=l>"
+                     f"{_h(pretty(d['unit']))}</td><td>{d['logs']}</td><td>{d['resolved']}</td><td>{d['bounds']}</td>"
+                     f"<td>{_n(d['median'])}</td><td>{_n(d['spread_factor'], '.3g')}</td><td>{_n(d['p05'])}</td>"
+                     f"<td>{_n(d['p95'])}</td><td>{_n(d['min'])}</td><td>{_n(d['max'])}</td><td>{_n(d['limit'])}</td>"
+                     f"<td{' class=fail' if d['fail'] else ''}>{d['fail']}</td><td>{d['outliers']}</td></tr>")
+    parts.append("</table>")
+    parts.append('<h2 id="figures">Figures</h2>')
+    if figure_note:
+        parts.append(f'<p class="flag">Figures not made: {_h(figure_note)}</p>')
+    for stem, data in figs.items():
+        cap = ("Histograms of the resolved N, B, K of every channel; median (black), limit (dashed), outliers (▼)"
+               if stem.endswith("hist") else "N, B, K of every log with their intervals; outliers circled;"
+               " ▼ marks the upper bound of a term the record does not resolve")
+        parts.append(f'<figure><img src="data:image/png;base64,{base64.b64encode(data).decode("ascii")}"'
+                     f' alt="{_h(cap)}"><figcaption>{_h(cap)}</figcaption></figure>')
+    parts.append('<h2 id="limits">Limits</h2>')
+    if fleet.limits:
+        parts.append(f"<p>{_h(_LIMIT_RULE)}.</p><ul>" + "".join(
+            f"<li>{_h(g)} {_h(t)} ≤ {_n(v['max'])} {_h(pretty(v['unit']))} ({_h(v['given'])}; {_h(v['source'])})</li>"
+            for g, terms in fleet.limits.items() for t, v in terms.items()) + "</ul>")
+        parts.append(f"<p><span class=pass>{sum(r.get('verdict') == 'pass' for r in recs)} pass</span>,"
+                     f" <span class=fail>{len(fails)} fail</span>,"
+                     f" {sum(r.get('verdict') == 'untested' for r in recs)} untested.</p>")
+        if fails:
+            parts.append("<table><tr><th class=l>log</th><th class=l>failures</th></tr>" + "".join(
+                f"<tr><td class=l>{_link(r)}</td><td class=l>{_h('; '.join(r['limit_failures']))}</td></tr>"
+                for r in fails) + "</table>")
+    else:
+        parts.append('<p class="muted">No limits given (--limits).</p>')
+    parts.append(f'<h2 id="outliers">Outliers against the fleet</h2><p>{_h(_OUTLIER_RULE)}.</p>')
+    outl = [r for r in recs if r.get("outliers")]
+    parts.append("<table><tr><th class=l>log</th><th class=l>terms</th></tr>" + "".join(
+        f"<tr><td class=l>{_link(r)}</td><td class=l>{_h(', '.join(r['outliers']))}</td></tr>" for r in outl)
+        + "</table>" if outl else '<p class="muted">None.</p>')
+    parts.append('<h2 id="errors">Logs that could not be analysed</h2>')
+    parts.append("<table><tr><th class=l>path</th><th class=l>error</th><th class=l>kind</th><th class=l>reason</th>"
+                 "</tr>" + "".join(f"<tr><td class=l>{_h(e['path'])}</td><td class=l>{_h(e['error']['type'])}</td>"
+                                   f"<td class=l>{_h(e['error']['kind'])}</td><td class=l>{_h(e['error']['message'])}"
+                                   "</td></tr>" for e in errs) + "</table>" if errs else '<p class="muted">None.</p>')
+    parts.append('<h2 id="logs">Logs</h2><table><tr><th class=l>log</th><th>duration</th><th>rate [Hz]</th>'
+                 "<th class=l>verdict</th><th>gyro N max</th><th>accel N max</th><th>outliers</th><th>warnings</th>"
+                 "<th class=l>sha256</th></tr>")
+    for r in recs:
+        nmax = {}
+        for g in IMU_GROUPS:
+            vs = [c["terms"]["N"]["value"] for c in r["channels"] if c["group"] == g and c.get("terms")
+                  and c["terms"]["N"]["resolved"]]
+            nmax[g] = max(vs) if vs else None
+        v = r.get("verdict", "")
+        parts.append(f"<tr><td class=l>{_link(r)}</td><td>{_n(r['duration_s'] / 3600, '.3g')} h</td>"
+                     f"<td>{_n(r['rate'], '.6g')}</td><td class='l {v}'>{_h(v or '–')}</td>"
+                     f"<td>{_n(nmax['gyro'])}</td><td>{_n(nmax['accel'])}</td><td>{len(r.get('outliers', []))}</td>"
+                     f"<td>{len(r.get('warnings', []))}</td><td class=l><code>{_h(r['sha256'][:12])}</code></td></tr>")
+    parts.append("</table></body></html>")
+    return "\n".join(parts) + "\n"
+
+
+def _link(r: Mapping[str, Any]) -> str:
+    label = _h(r["path"])
+    if r.get("name") and r.get("has_report", True):
+        return f'<a href="{_h(_LOGS)}/{_h(r["name"])}/report.html">{label}</a>'
+    return label
+
+
+def _build_fleet(out: Path, records: list[dict], errors: list[dict], *, limits: Mapping[str, Any],
+                 outlier_z: float, computed: int, reused: int, seconds: float, figures: bool) -> FleetSummary:
+    rows = _rows(records, limits)
+    dist = _outliers_and_distribution(rows, limits, outlier_z)
+    _annotate(records, rows, limits)
+    for r in records:
+        r["has_report"] = (out / _LOGS / r["name"] / "report.html").is_file()
+    figs: dict[str, bytes] = {}
+    note = ""
+    if figures:
+        try:
+            figs = _fleet_figures(rows, limits)
+        except SigmaTauError as exc:  # matplotlib missing: the tables are still useful
+            note = str(exc)
+    files = []
+    for stem, data in figs.items():
+        _write_text(out / f"{stem}.png", data)
+        files.append(out / f"{stem}.png")
+    fleet = FleetSummary(out=out, records=tuple(records), errors=tuple(errors), rows=tuple(rows),
+                         distribution=tuple(dist), limits=dict(limits), computed=computed, reused=reused,
+                         seconds=seconds)
+    _write_text(out / "fleet.csv", _csv_text(_ROW_COLUMNS, rows))
+    _write_text(out / "fleet_logs.csv", _csv_text(_LOG_COLUMNS, _log_rows(records, errors)))
+    _write_text(out / "fleet.json", json.dumps(fleet.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n")
+    _write_text(out / "fleet.html", _fleet_html(fleet, figs, note))
+    files += [out / n for n in ("fleet.csv", "fleet_logs.csv", "fleet.json", "fleet.html")]
+    return replace(fleet, files=tuple(files))
+
+
+# -------------------------------------------------------------------------- main
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> tuple[Any, Callable[[], None]]:
+    """The client to use and how to close what was opened here."""
+    if client is not None:
+        return client, lambda: None
+    distributed = _distributed()
+    if scheduler is not None:
+        try:
+            c = distributed.Client(scheduler, timeout="20s")
+        except (OSError, TimeoutError) as exc:
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {_one_line(exc)}") from None
+        return c, c.close
+    n = workers or _cores()
+    import dask
+
+    try:
+        # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which also fixes glibc's mmap
+        # threshold at 128 KiB: every array of a long log is then mmapped and page-faulted afresh,
+        # and the analysis runs 2-3 times slower (measured). Unset here (None unsets it).
+        with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}), \
+                warnings.catch_warnings():  # the scheduler's HTTP port: another one is taken when 8787 is
+            warnings.filterwarnings("ignore", message="Port .* is already in use")
+            cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                               dashboard_address=None)
+    except Exception as exc:
+        raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {_one_line(exc)}") from None
+    c = distributed.Client(cluster)
+
+    def close() -> None:
+        c.close()
+        cluster.close()
+
+    return c, close
+
+
+def analyze_many(
+    paths: Union[PathLike, Sequence[PathLike]],
+    out: PathLike,
+    *,
+    client: Any = None,
+    scheduler: Optional[str] = None,
+    workers: Optional[int] = None,
+    read: Optional[Mapping[str, Any]] = None,
+    statistics: Union[str, Sequence[str]] = DEFAULT_STATISTICS,
+    taus: Any = "octave",
+    confidence: float = ONE_SIGMA,
+    model: bool = True,
+    axis_rule: str = "max",
+    inflate: float = 1.0,
+    rostopic: str = "/imu0",
+    datasheet: Union[str, Mapping[str, Any], None] = None,
+    figures: Optional[Sequence[str]] = ("png",),
+    report: bool = True,
+    limits: Any = None,
+    limit_margin: float = LIMIT_MARGIN,
+    outlier_z: float = OUTLIER_Z,
+    fleet_figures: bool = True,
+    force: bool = False,
+    progress: Any = None,
+) -> FleetSummary:
+    """Analyse many logs on a Dask cluster, one task per log, and summarise the fleet.
+
+    Parameters
+    ----------
+    paths : path, pattern or sequence of them
+        Logs: files, ROS 2 bag directories or glob patterns
+        (:func:`expand_patterns`). With a remote cluster, the workers must see
+        the same paths (a shared file system) and write to ``out``.
+    out : path
+        Output directory (created; its parent must exist). Reused by a rerun,
+        which skips the logs already done.
+    client : distributed.Client, optional
+        A client of the cluster to use (left open).
+    scheduler : str, optional
+        Address of an existing scheduler (``"tcp://host:8786"``) to connect to.
+    workers : int, optional
+        Without ``client`` and ``scheduler``: a ``LocalCluster`` of this many
+        single-threaded worker processes (default: the usable cores).
+    read : mapping, optional
+        Keyword arguments of :func:`sigmatau.io.read` (``columns``,
+        ``time_unit``, ``rate``, ``units``, ``topic``, ``gaps`` …), the same
+        for every log.
+    statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet
+        As :func:`sigmatau.analysis.analyze_log`.
+    figures : sequence of {"png", "svg", "pdf"} or None
+        Per-log figure formats (default PNG only; None: no figures, fastest).
+    report : bool
+        Write each log's ``report.html``.
+    limits : str, path or mapping, optional
+        Pass/fail limits (:func:`load_limits`): a datasheet part, a file or a mapping.
+    limit_margin : float
+        Factor on a datasheet part's typical values (default 1.5).
+    outlier_z : float
+        Robust z beyond which a term is an outlier of its fleet (default 3.5).
+    fleet_figures : bool
+        Draw the fleet histograms and strip plot (needs matplotlib).
+    force : bool
+        Recompute every log, replacing its directory (also when the settings changed).
+    progress : None, bool, "bar", "lines", "none" or callable
+        None: a bar on stderr when it is a terminal. A callable is called as
+        ``progress(record, done, total)`` after each log (raising
+        KeyboardInterrupt from it stops the run like Ctrl-C).
+
+    Returns
+    -------
+    FleetSummary
+
+    Notes
+    -----
+    Each log is one task ``(hash, read, analyze_log, write_outputs, record)``
+    that returns a small record and never raises: a corrupt or unreadable log
+    becomes an error record with the exception's class and a one-line reason.
+    The per-log directory ``out/logs/<stem>-<sha256[:12]>`` is written under a
+    hidden name and renamed into place, its ``record.json`` included, so it
+    exists only complete; a task finding the directory of its content already
+    there returns that record. The client appends every finished record to
+    ``out/index.jsonl`` (fsync) as it arrives, and a rerun skips paths whose
+    size and mtime match a journal entry whose directory exists, without
+    submitting them; the others are hashed on the workers and skipped there.
+    The fleet summary counts each content once. A worker that dies has its
+    tasks rerun elsewhere by Dask; after ``distributed.scheduler.allowed-failures``
+    deaths the log is reported as failed (``KilledWorker``).
+    """
+    from .outputs import FIGURE_FORMATS
+
+    t0 = time.perf_counter()
+    out_p = Path(out)
+    files = expand_patterns([paths] if isinstance(paths, (str, os.PathLike)) else list(paths), exclude=out_p)
+    if client is not None and scheduler is not None:
+        raise ParameterError("give client or scheduler, not both")
+    if (client is not None or scheduler is not None) and workers is not None:
+        raise ParameterError("workers= starts a local cluster; it cannot be combined with client or scheduler")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ParameterError(f"workers={workers!r} must be a positive integer")
+    fmts = [str(f).lower() for f in (figures or ())]
+    for f in fmts:
+        if f not in FIGURE_FORMATS:
+            raise ParameterError(f"figure format {f!r} must be one of {', '.join(FIGURE_FORMATS)}")
+    if isinstance(outlier_z, bool) or not isinstance(outlier_z, (int, float)) or not outlier_z > 0:
+        raise ParameterError(f"outlier_z={outlier_z!r} must be a positive number")
+    read_kw = _read_kwargs(read)
+    analysis_kw = _analysis_kwargs(statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet)
+    lim = load_limits(limits, margin=limit_margin)
+    if out_p.exists() and not out_p.is_dir():
+        raise ParameterError(f"out {str(out_p)!r} exists and is not a directory")
+    if not out_p.resolve().parent.is_dir():
+        raise ParameterError(f"out {str(out_p)!r}: the parent directory does not exist")
+    out_p.mkdir(exist_ok=True)
+    logs_dir = out_p / _LOGS
+    logs_dir.mkdir(exist_ok=True)
+    settings = json_ready({"version": __version__, "read": read_kw, "analysis": analysis_kw, "figures": fmts,
+                           "report": bool(report)})
+
+    with _Lock(out_p):
+        token = _check_settings(out_p, settings, force)
+        results: dict[str, dict[str, Any]] = {}
+        stats = {p: _stat(p) for p in files}
+        todo = []
+        index = {} if force else _read_index(out_p)
+        for p in files:
+            e = index.get(p)
+            if e and e.get("status") == "ok" and e.get("name") and stats[p] is not None \
+                    and [e.get("size"), e.get("mtime_ns")] == list(stats[p]):
+                try:
+                    rec = json.loads((logs_dir / e["name"] / _RECORD).read_text(encoding="utf-8"))
+                except (OSError, ValueError):
+                    rec = None
+                if rec is not None and rec.get("sha256") == e.get("sha256"):
+                    results[p] = {**rec, "path": p, "reused": True}
+                    continue
+            todo.append(p)
+        bar = _Progress(len(files), progress)
+        for rec in results.values():
+            bar.update(rec)
+        journal = _Journal(out_p)
+        closer: Callable[[], None] = lambda: None
+        futures: list[Any] = []
+        try:
+            if todo:
+                distributed = _distributed()
+                cl, closer = _connect(client, scheduler, workers)
+                # Key: the log and settings, plus this run: a key of an interrupted run may still be
+                # being cancelled on the scheduler, and reusing it would hand back its CancelledError.
+                run = uuid.uuid4().hex[:8]
+                keys = {}
+                for p in todo:
+                    st = stats[p] or (0, 0)
+                    keys[p] = f"sigmatau-log-{_stem(p)}-" + hashlib.sha256(
+                        f"{p}\0{st[0]}\0{st[1]}\0{logs_dir.resolve()}\0{token}\0{force}".encode()
+                    ).hexdigest()[:16] + f"-{run}"
+                futures = [cl.submit(_analyse_one, p, str(logs_dir.resolve()), read_kw, analysis_kw, fmts,
+                                     bool(report), bool(force), token, key=keys[p], pure=False) for p in todo]
+                path_of = {f.key: p for f, p in zip(futures, todo)}
+                for fut in distributed.as_completed(futures):
+                    p = path_of[fut.key]
+                    try:
+                        rec = fut.result()
+                    except Exception as exc:  # KilledWorker, CancelledError: the log failed, the rest go on
+                        rec = _error_record(p, exc)
+                    rec = {**rec, "path": p}
+                    fut.release()
+                    results[p] = rec
+                    journal.append(rec, stats[p])
+                    bar.update(rec)
+        finally:
+            bar.close()
+            journal.close()
+            if futures:
+                with contextlib.suppress(Exception):  # a cluster already gone has nothing left to cancel
+                    cl.cancel([f for f in futures if not f.done()])
+            closer()
+        for d in logs_dir.glob(".*"):  # leftovers of attempts that died (the lock says we are alone)
+            shutil.rmtree(d, ignore_errors=True) if d.is_dir() else d.unlink(missing_ok=True)
+
+        ok: dict[str, dict] = {}
+        errors = []
+        for p in files:
+            rec = results[p]
+            if rec["status"] != "ok":
+                errors.append(rec)
+            elif rec["sha256"] in ok:  # the same content under another path: counted once
+                ok[rec["sha256"]].setdefault("same_content", []).append(p)
+            else:
+                ok[rec["sha256"]] = dict(rec)
+        computed = sum(1 for r in results.values() if r["status"] == "ok" and not r.get("reused"))
+        reused = sum(1 for r in results.values() if r["status"] == "ok" and r.get("reused"))
+        fleet = _build_fleet(out_p, list(ok.values()), errors, limits=lim, outlier_z=float(outlier_z),
+                             computed=computed, reused=reused, seconds=time.perf_counter() - t0,
+                             figures=fleet_figures)
+    return replace(fleet, seconds=time.perf_counter() - t0)
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+def add_cli(subparsers: Any) -> None:
+    """Register ``sigmatau batch`` on the ``sigmatau`` command's subparsers."""
+    import textwrap
+
+    from .cli import _Formatter
+
+    p = subparsers.add_parser(
+        "batch", help="analyse many logs on a Dask cluster (local or existing) and summarise the fleet",
+        formatter_class=_Formatter,
+        description="Run the analysis of 'sigmatau analyze' on every log named by the patterns, one Dask task per"
+                    " log, on a LocalCluster of single-threaded worker processes (default) or on an existing cluster"
+                    " (--scheduler). Each log's outputs go to OUT/logs/<name>-<sha256>/ as it finishes; a rerun skips"
+                    " the logs already done. Then a fleet summary: fleet.csv (per log, channel and term), fleet.json,"
+                    " fleet_logs.csv, histograms and fleet.html with outliers, pass/fail against --limits and the"
+                    " logs that failed with their reason. Needs the extra dask: pip install \"sigmatau[dask]\".",
+        epilog=textwrap.dedent("""
+            examples:
+              sigmatau batch 'line3/*.csv' --out line3-fleet --limits lsm6dsl
+              sigmatau batch 'bags/**/rosbag2_*' --topic /imu/data --out fleet --workers 8 --no-figures
+              sigmatau batch 'logs/*.csv' --out fleet --scheduler tcp://10.0.0.5:8786
+            exit codes: 0 every log analysed; 1 some log failed (the summary is still written) or a data error;
+            2 usage error (bad option, pattern matching nothing, OUT made with other settings);
+            130 interrupted (rerun the same command to resume).
+            """))
+    p.add_argument("patterns", nargs="+", metavar="PATTERN",
+                   help="logs: files, ROS 2 bag directories or glob patterns (expanded by sigmatau; quote them)")
+    p.add_argument("--out", required=True, help="output directory (created; reused by a rerun, which resumes)")
+    c = p.add_argument_group("cluster").add_mutually_exclusive_group()
+    c.add_argument("--scheduler", metavar="ADDRESS", help="address of an existing Dask scheduler, tcp://host:8786")
+    c.add_argument("--workers", type=int, help="local cluster of N single-threaded worker processes"
+                                               " (default: the cores)")
+    g = p.add_argument_group("input (the same for every log)")
+    g.add_argument("--format", help="reader: csv, stable32, npy, npz, rosbag1, rosbag2, hdf5, parquet")
+    g.add_argument("--columns", help="channels by column name or 0-based index, comma-separated")
+    g.add_argument("--time-column", help="the timestamp column (default: found by name); 'none' for none")
+    g.add_argument("--time-unit", choices=["s", "ms", "us", "ns", "min", "h", "d"], help="unit of the timestamps")
+    g.add_argument("--rate", type=float, help="sample rate in Hz (needed without timestamps)")
+    g.add_argument("--data-type", choices=["freq", "phase"], help="freq (default) or phase data")
+    g.add_argument("--topic", help="ROS bags: the sensor_msgs/Imu topic")
+    g.add_argument("--dataset", help="HDF5: the dataset or group")
+    g.add_argument("--stamps", choices=["header", "bag"], help="ROS bags: header.stamp (default) or receive time")
+    g.add_argument("--delimiter", help="text files: the field delimiter")
+    g.add_argument("--gaps", choices=["refuse", "split", "ignore"], default="refuse",
+                   help="missing samples: refuse (default), split (longest segment) or ignore")
+    g.add_argument("--gap-threshold", type=float, default=1.5, help="gap: a step above this many median steps")
+    g.add_argument("--unsorted", choices=["sort", "refuse"], default="sort", help="timestamps going backwards")
+    g.add_argument("--duplicates", choices=["drop", "refuse"], default="drop", help="repeated timestamps")
+    g.add_argument("--gyro-unit", help="rad/s, mrad/s, deg/s, mdps, deg/h")
+    g.add_argument("--accel-unit", help="m/s^2, mm/s^2, g, mg, ug")
+    g.add_argument("--unit", action="append", default=[], metavar="CHANNEL=UNIT", help="unit of one channel")
+    a = p.add_argument_group("analysis (as sigmatau analyze)")
+    a.add_argument("--stat", default="oadev,mdev,tdev,ohdev,totdev,theoh",
+                   help="statistics, comma-separated (default oadev,mdev,tdev,ohdev,totdev,theoh)")
+    a.add_argument("--taus", default="octave", help="τ grid: octave (default), decade, all, log")
+    a.add_argument("--confidence", type=float, default=0.6827, help="coverage of the intervals (default ±1σ)")
+    a.add_argument("--no-model", action="store_true", help="statistics only, no IMU noise model")
+    a.add_argument("--axis-rule", choices=["max", "rms", "mean"], default="max", help="Kalibr axis rule")
+    a.add_argument("--inflate", type=float, default=1.0, help="inflation factor of the Kalibr values")
+    a.add_argument("--rostopic", default="/imu0", help="rostopic written to imu.yaml")
+    a.add_argument("--datasheet", action="append", default=[], metavar="PART|GROUP.TERM=VALUE UNIT",
+                   help="datasheet figures compared in each log's report (repeatable)")
+    o = p.add_argument_group("outputs and fleet summary")
+    o.add_argument("--figures", default="png", help="per-log figure formats: png, svg, pdf (default png)")
+    o.add_argument("--no-figures", action="store_true", help="no per-log figures (faster); fleet figures still made")
+    o.add_argument("--no-report", action="store_true", help="no per-log report.html")
+    o.add_argument("--limits", metavar="PART|FILE",
+                   help="pass/fail limits: a datasheet part (lsm6dsl, lsm6dsm, adis16448, euroc; typical × margin)"
+                        " or a JSON/YAML/CSV file (group, term, max, unit)")
+    o.add_argument("--limit-margin", type=float, default=LIMIT_MARGIN,
+                   help=f"factor on a part's typical datasheet values (default {LIMIT_MARGIN:g})")
+    o.add_argument("--outlier-z", type=float, default=OUTLIER_Z,
+                   help=f"robust z beyond which a term is a fleet outlier (default {OUTLIER_Z:g})")
+    o.add_argument("--force-rerun", action="store_true", help="recompute every log, also those already done")
+    p.add_argument("--quiet", action="store_true", help="no progress output")
+    p.add_argument("--debug", action="store_true", help="show the traceback of an error")
+    p.set_defaults(func=_cmd_batch)
+
+
+def _cli_read_options(args: Any) -> dict[str, Any]:
+    from .cli import _UsageError
+
+    kw: dict[str, Any] = {}
+    for name in ("format", "time_unit", "rate", "data_type", "topic", "dataset", "stamps", "delimiter"):
+        if getattr(args, name) is not None:
+            kw[name] = getattr(args, name)
+    if args.columns:
+        kw["columns"] = [int(c) if c.strip().lstrip("-").isdigit() else c.strip() for c in args.columns.split(",")]
+    if args.time_column is not None:
+        tc = args.time_column
+        kw["time_column"] = False if tc.lower() == "none" else (int(tc) if tc.isdigit() else tc)
+    kw.update(gaps=args.gaps, gap_threshold=args.gap_threshold, unsorted=args.unsorted, duplicates=args.duplicates)
+    units: dict[str, str] = {}
+    if args.gyro_unit:
+        units["gyro"] = args.gyro_unit
+    if args.accel_unit:
+        units["accel"] = args.accel_unit
+    for spec in args.unit:
+        name, sep, unit = spec.partition("=")
+        if not sep or not name or not unit:
+            raise _UsageError(f"--unit {spec!r} must be CHANNEL=UNIT")
+        units[name.strip()] = unit.strip()
+    if units:
+        kw["units"] = units
+    return kw
+
+
+def _cmd_batch(args: Any, console: Any) -> int:
+    from .cli import EXIT_DATA, EXIT_OK, _datasheet, _UsageError
+
+    if args.workers is not None and args.workers < 1:
+        raise _UsageError(f"--workers {args.workers!r} must be at least 1")
+    if not 0 < args.confidence < 1:
+        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    figures = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
+    if console.quiet:
+        progress: Any = "none"
+    else:
+        progress = "bar" if sys.stderr.isatty() else "lines"
+    where = f"the Dask scheduler at {args.scheduler}" if args.scheduler else \
+        f"a local Dask cluster of {args.workers or _cores()} worker process(es)"
+    if not console.quiet:
+        print(f"sigmatau batch: {args.out} on {where}", file=sys.stderr, flush=True)
+    fleet = analyze_many(
+        args.patterns, args.out, scheduler=args.scheduler, workers=args.workers, read=_cli_read_options(args),
+        statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
+        axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic, datasheet=_datasheet(args.datasheet),
+        figures=figures, report=not args.no_report, limits=args.limits, limit_margin=args.limit_margin,
+        outlier_z=args.outlier_z, force=args.force_rerun, progress=progress)
+    print(fleet.summary())
+    print(f"wrote {args.out}/fleet.html, fleet.csv, fleet_logs.csv, fleet.json; per log: {args.out}/{_LOGS}/")
+    return EXIT_OK if fleet.ok else EXIT_DATA
