@@ -194,6 +194,8 @@ class LogAnalysis:
     def summary(self) -> str:
         """Terminal summary: data checks, then per channel the model (SI and customary units) and flags."""
         log = self.log
+        from .imu import _duration
+
         lines = [f"sigmatau {self.version}: {log.source.path} ({log.source.format}), {len(log.channels)} channel(s)"
                  f" × {len(log)} samples at {log.rate:.6g} Hz ({_duration(len(log) / log.rate)})"]
         lines.append("timing: " + log.timing.summary().replace("\n", "\n  "))
@@ -258,14 +260,6 @@ def _fmt_param(p: Any, pretty: Callable[[str], str]) -> str:
     if not p.resolved:
         return f"< {p.high:.3g} {pretty(p.unit)}" if math.isfinite(p.high) else "not resolved"
     return f"{p.value:.4g} [{p.low:.4g}, {p.high:.4g}] {pretty(p.unit)}"
-
-
-def _duration(seconds: float) -> str:
-    if seconds >= 7200:
-        return f"{seconds / 3600:.3g} h"
-    if seconds >= 120:
-        return f"{seconds / 60:.3g} min"
-    return f"{seconds:.3g} s"
 
 
 # ----------------------------------------------------------------------- helpers

@@ -1389,36 +1389,8 @@ def add_cli(subparsers: Any) -> None:
     p.set_defaults(func=_cmd_batch)
 
 
-def _cli_read_options(args: Any) -> dict[str, Any]:
-    from .cli import _UsageError
-
-    kw: dict[str, Any] = {}
-    for name in ("format", "time_unit", "rate", "data_type", "topic", "dataset", "stamps", "delimiter"):
-        if getattr(args, name) is not None:
-            kw[name] = getattr(args, name)
-    if args.columns:
-        kw["columns"] = [int(c) if c.strip().lstrip("-").isdigit() else c.strip() for c in args.columns.split(",")]
-    if args.time_column is not None:
-        tc = args.time_column
-        kw["time_column"] = False if tc.lower() == "none" else (int(tc) if tc.isdigit() else tc)
-    kw.update(gaps=args.gaps, gap_threshold=args.gap_threshold, unsorted=args.unsorted, duplicates=args.duplicates)
-    units: dict[str, str] = {}
-    if args.gyro_unit:
-        units["gyro"] = args.gyro_unit
-    if args.accel_unit:
-        units["accel"] = args.accel_unit
-    for spec in args.unit:
-        name, sep, unit = spec.partition("=")
-        if not sep or not name or not unit:
-            raise _UsageError(f"--unit {spec!r} must be CHANNEL=UNIT")
-        units[name.strip()] = unit.strip()
-    if units:
-        kw["units"] = units
-    return kw
-
-
 def _cmd_batch(args: Any, console: Any) -> int:
-    from .cli import EXIT_DATA, EXIT_OK, _datasheet, _UsageError
+    from .cli import EXIT_DATA, EXIT_OK, _datasheet, _read_options, _UsageError
 
     if args.workers is not None and args.workers < 1:
         raise _UsageError(f"--workers {args.workers!r} must be at least 1")
@@ -1434,7 +1406,7 @@ def _cmd_batch(args: Any, console: Any) -> int:
     if not console.quiet:
         print(f"sigmatau batch: {args.out} on {where}", file=sys.stderr, flush=True)
     fleet = analyze_many(
-        args.patterns, args.out, scheduler=args.scheduler, workers=args.workers, read=_cli_read_options(args),
+        args.patterns, args.out, scheduler=args.scheduler, workers=args.workers, read=_read_options(args),
         statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
         axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic, datasheet=_datasheet(args.datasheet),
         figures=figures, report=not args.no_report, limits=args.limits, limit_margin=args.limit_margin,

@@ -119,18 +119,18 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str) -> Non
     g.add_argument("--workers", type=int, help="channels analysed at once (default: the cores)")
 
 
-def _read(args: argparse.Namespace, console: _Console) -> Any:
-    from . import io
-
-    columns: Any = None
+def _read_options(args: argparse.Namespace) -> dict[str, Any]:
+    """The keyword arguments of :func:`sigmatau.io.read` given by the input options (shared with batch)."""
+    kw: dict[str, Any] = {}
+    for name in ("format", "time_unit", "rate", "data_type", "topic", "dataset", "stamps", "delimiter"):
+        if getattr(args, name) is not None:
+            kw[name] = getattr(args, name)
     if args.columns:
-        columns = [int(c) if c.strip().lstrip("-").isdigit() else c.strip() for c in args.columns.split(",")]
-    time_column: Any = args.time_column
-    if isinstance(time_column, str):
-        if time_column.lower() == "none":
-            time_column = False
-        elif time_column.isdigit():
-            time_column = int(time_column)
+        kw["columns"] = [int(c) if c.strip().lstrip("-").isdigit() else c.strip() for c in args.columns.split(",")]
+    if args.time_column is not None:
+        tc = args.time_column
+        kw["time_column"] = False if tc.lower() == "none" else (int(tc) if tc.isdigit() else tc)
+    kw.update(gaps=args.gaps, gap_threshold=args.gap_threshold, unsorted=args.unsorted, duplicates=args.duplicates)
     units: dict[str, str] = {}
     if args.gyro_unit:
         units["gyro"] = args.gyro_unit
@@ -141,11 +141,15 @@ def _read(args: argparse.Namespace, console: _Console) -> Any:
         if not sep or not name or not unit:
             raise _UsageError(f"--unit {spec!r} must be CHANNEL=UNIT")
         units[name.strip()] = unit.strip()
-    return io.read(args.log, format=args.format, columns=columns, time_column=time_column,
-                   time_unit=args.time_unit, rate=args.rate, data_type=args.data_type, units=units or None,
-                   topic=args.topic, dataset=args.dataset, stamps=args.stamps, gaps=args.gaps,
-                   gap_threshold=args.gap_threshold, unsorted=args.unsorted, duplicates=args.duplicates,
-                   delimiter=args.delimiter, progress=False if console.quiet else None)
+    if units:
+        kw["units"] = units
+    return kw
+
+
+def _read(args: argparse.Namespace, console: _Console) -> Any:
+    from . import io
+
+    return io.read(args.log, progress=False if console.quiet else None, **_read_options(args))
 
 
 def _list_topics(args: argparse.Namespace) -> int:
