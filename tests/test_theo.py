@@ -139,6 +139,23 @@ def test_fast_sum_matches_oracle(oracle_cases):
             assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
 
 
+@pytest.mark.parametrize("uncached_fft", [1, 1 << 30])
+def test_fast_sum_in_small_pieces_matches_oracle(oracle_cases, monkeypatch, uncached_fft):
+    # The memory-bounding pieces of the lag-sum form, forced at small N: lag sums
+    # read in chunks of 7 (odd, so chunks straddle every boundary), triangle blocks
+    # and segments in groups of a few, and every transform through numpy.fft (the
+    # path of long transforms, ≥ 2^18 points) or through scipy.fft.
+    monkeypatch.setattr(theo, "CHUNK", 7)
+    monkeypatch.setattr(theo, "_BATCH_ELEMENTS", 64)
+    monkeypatch.setattr(theo, "_UNCACHED_FFT", uncached_fft)
+    for kind, n, x, ms, ref in oracle_cases:
+        for m, r in zip(ms, ref):
+            got, err = theo._theo1_sum_fast(x, int(m))
+            rel = abs(got - r) / r
+            assert rel <= ORACLE_RTOL, f"{kind} N={n} m={m}: {rel:.2e}"
+            assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
+
+
 def test_incremental_sums_match_oracle(oracle_cases):
     # One pass over the record with global lag sums: digits are lost to cancellation
     # on smooth phase at small m (up to 1e-7 here on random-walk FM); the error

@@ -22,7 +22,7 @@ import numpy as np
 from scipy import fft as _fft
 
 from ._driver import Statistic, finish, prepare, run
-from ._numeric import dot
+from ._numeric import CHUNK, dot
 from ._input import DataType
 from ._uncertainty import CiMethod, check_options
 from .allan import _doc, _oavar_kernel
@@ -101,7 +101,9 @@ def _triangle_sums(u: np.ndarray, v: np.ndarray, g: np.ndarray, hankel: bool) ->
     ``u`` and ``v`` have shape (rows, P) with P a power of two; ``g`` has at least
     2P entries. The upper triangle is split dyadically: rectangles
     ``[lo, lo+s) × [lo+s, lo+2s)`` are FFT correlations (or convolutions), and
-    the diagonal blocks of size ``_LEAF`` are summed directly.
+    the diagonal blocks of size ``_LEAF`` are summed directly. Blocks are taken
+    in groups of about ``_BATCH_ELEMENTS`` values, so the temporaries stay a few
+    times ``u`` at the top level and small below it.
     """
     rows, P = u.shape
     leaf = min(_LEAF, P)
@@ -109,33 +111,58 @@ def _triangle_sums(u: np.ndarray, v: np.ndarray, g: np.ndarray, hankel: bool) ->
     s = P // 2
     while s >= leaf:
         nb = P // (2 * s)
-        U = u.reshape(rows, nb, 2 * s)[:, :, :s]
-        V = v.reshape(rows, nb, 2 * s)[:, :, s:]
         nf = 2 * s
-        Uf = _fft.rfft(U, nf, axis=-1)
-        Vf = _fft.rfft(V, nf, axis=-1)
+        per = max(1, _BATCH_ELEMENTS // (rows * nf))
+        acc = None
+        for b0 in range(0, nb, per):
+            b1 = min(b0 + per, nb)
+            U = u[:, b0 * nf : b1 * nf].reshape(rows, b1 - b0, nf)[:, :, :s]
+            V = v[:, b0 * nf : b1 * nf].reshape(rows, b1 - b0, nf)[:, :, s:]
+            Uf = _rfft(U, nf)
+            Vf = _rfft(V, nf)
+            if not hankel:
+                np.conjugate(Uf, out=Uf)
+                Uf *= Vf
+                del Vf
+                # b - a = s + r with r = q - p in (-s, s); the weight is the same in every block.
+                if acc is None:
+                    acc = Uf.sum(axis=1)
+                else:
+                    acc += Uf.sum(axis=1)
+                del Uf
+            else:
+                Uf *= Vf
+                del Vf
+                cv = _irfft(Uf, nf)
+                del Uf
+                start = 2 * np.arange(b0, b1) * nf + s
+                for lo in range(0, 2 * s - 1, CHUNK):
+                    hi = min(lo + CHUNK, 2 * s - 1)
+                    idx = start[:, None] + np.arange(lo, hi)[None, :]
+                    total += np.einsum("rbt,bt->r", cv[:, :, lo:hi], g[idx])
+                del cv
         if not hankel:
-            # b - a = s + r with r = q - p in (-s, s); the weight is the same in every block.
-            cc = _fft.irfft((np.conj(Uf) * Vf).sum(axis=1), nf, axis=-1)
-            r = np.arange(-(s - 1), s)
-            total += np.einsum("ri,i->r", cc[:, r % nf], g[s + r])
-        else:
-            cv = _fft.irfft(Uf * Vf, nf, axis=-1)[:, :, : 2 * s - 1]
-            lo = np.arange(nb) * 2 * s
-            idx = (2 * lo + s)[:, None] + np.arange(2 * s - 1)[None, :]
-            total += np.einsum("rbt,bt->r", cv, g[idx])
+            cc = _irfft(acc, nf)
+            del acc
+            for lo in range(0, 2 * s - 1, CHUNK):
+                r = np.arange(lo, min(lo + CHUNK, 2 * s - 1)) - (s - 1)
+                total += np.einsum("ri,i->r", cc[:, r % nf], g[s + r])
+            del cc
         s //= 2
     # Diagonal blocks, one diagonal q - p = e at a time.
     nb = P // leaf
-    U = u.reshape(rows, nb, leaf)
-    V = v.reshape(rows, nb, leaf)
-    base = 2 * (np.arange(nb) * leaf)[:, None] + 2 * np.arange(leaf)[None, :]
-    for e in range(leaf):
-        prod = U[:, :, : leaf - e] * V[:, :, e:]
-        if hankel:
-            total += np.einsum("rbp,bp->r", prod, g[base[:, : leaf - e] + e])
-        else:
-            total += g[e] * prod.sum(axis=(1, 2))
+    per = max(1, _BATCH_ELEMENTS // (rows * leaf))
+    for b0 in range(0, nb, per):
+        b1 = min(b0 + per, nb)
+        U = u[:, b0 * leaf : b1 * leaf].reshape(rows, b1 - b0, leaf)
+        V = v[:, b0 * leaf : b1 * leaf].reshape(rows, b1 - b0, leaf)
+        base = 2 * (np.arange(b0, b1) * leaf)[:, None] + 2 * np.arange(leaf)[None, :]
+        for e in range(leaf):
+            prod = U[:, :, : leaf - e] * V[:, :, e:]
+            if hankel:
+                total += np.einsum("rbp,bp->r", prod, g[base[:, : leaf - e] + e])
+            else:
+                total += g[e] * prod.sum(axis=(1, 2))
     return total
 
 
@@ -184,53 +211,108 @@ class _EdgeWeights:
         return out
 
 
+#: Transforms at least this long use numpy.fft, which keeps no plans: scipy.fft
+#: caches its last 16, about 8 bytes per point each (141 MB for one transform of
+#: 1.8·10^7 points), which stay resident after the call.
+_UNCACHED_FFT = 1 << 18
+
+
+def _rfft(a: np.ndarray, n: int) -> np.ndarray:
+    return np.fft.rfft(a, n, axis=-1) if n >= _UNCACHED_FFT else _fft.rfft(a, n, axis=-1)
+
+
+def _irfft(a: np.ndarray, n: int) -> np.ndarray:
+    return np.fft.irfft(a, n, axis=-1) if n >= _UNCACHED_FFT else _fft.irfft(a, n, axis=-1, overwrite_x=True)
+
+
+def _detrended(X: np.ndarray) -> np.ndarray:
+    """Copy of X with each row's least-squares line removed (the time axis in chunks, not stored)."""
+    n = X.shape[1]
+    X = X - X.mean(axis=1, keepdims=True)
+    centre = 0.5 * (n - 1)
+    slope = np.zeros(X.shape[0])
+    for lo in range(0, n, CHUNK):
+        t = np.arange(lo, min(lo + CHUNK, n)) - centre
+        slope += np.einsum("ri,i->r", X[:, lo : lo + t.size], t)
+    slope /= n * (n * n - 1.0) / 12.0  # Σ t²
+    for lo in range(0, n, CHUNK):
+        t = np.arange(lo, min(lo + CHUNK, n)) - centre
+        X[:, lo : lo + t.size] -= slope[:, None] * t
+    return X
+
+
 def _fft_sums(X: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarray]:
     """Theo1 sums of each row of X (rows are independent records) and their error scale.
 
     Returns ``(S, scale)`` where the rounding error of ``S`` is about
     ``eps·scale`` (``scale = H_h·Σx²`` after removing each row's line).
-    Transforms are freed as soon as their few wanted lags are copied out, so
-    the peak is about six times the size of X (with padding), not a dozen.
+    Each transform is reduced to the few sums it feeds and freed at once, the
+    even-lag autocorrelation comes from half-length transforms, and the
+    weighted lag sums read slices chunk by chunk: the peak is X, its detrended
+    copy and one transform of X's length (output, work buffer and plan, about
+    three times X), ≈ 6.5× X for one record of 10^7 points.
     """
     rows, n = X.shape
     h = m // 2
     K = n - m
-    t = np.arange(n) - 0.5 * (n - 1)
-    X = X - X.mean(axis=1, keepdims=True)
-    X -= (np.einsum("ri,i->r", X, t) / dot(t, t))[:, None] * t
-    L = np.arange(1, h + 1)
-    inv_l = 1.0 / L
-    harmonic = float(inv_l.sum())
+    X = _detrended(X)
     # C(ℓ) = Σ_{i<K} A_i x_{i+ℓ}, ℓ ≤ m, never reaches past i + ℓ = n - 1: no padding.
-    # Each transform is reduced to the few sums it feeds and freed at once, so the
-    # peak stays a few times the size of X.
     nfft = _fft.next_fast_len(n, real=True)
-    P = _fft.rfft(X[:, :K] + X[:, m:], nfft, axis=1)
+    P = _rfft(X[:, :K] + X[:, m:], nfft)
     np.conjugate(P, out=P)
-    P *= _fft.rfft(X, nfft, axis=1)
-    C = _fft.irfft(P, nfft, axis=1, overwrite_x=True)
+    P *= _rfft(X, nfft)
+    C = _irfft(P, nfft)
     del P
-    cross = np.einsum("ri,i->r", C[:, L] + C[:, m - L], inv_l)
+    cross = np.zeros(rows)
+    harmonic = 0.0
+    for lo in range(0, h, CHUNK):
+        hi = min(lo + CHUNK, h)
+        inv_l = 1.0 / np.arange(lo + 1, hi + 1)  # 1/L for L = lo+1 … hi
+        harmonic += float(inv_l.sum())
+        # C(L) + C(m-L); the second runs backwards.
+        cross += np.einsum("ri,i->r", C[:, lo + 1 : hi + 1] + C[:, m - hi : m - lo][:, ::-1], inv_l)
     del C
-    # Autocorrelation at the even lags 2j < m: n + m - 1 points keep it from wrapping.
-    nfft = _fft.next_fast_len(n + m - 1, real=True)
-    P = _fft.rfft(X, nfft, axis=1)
+    # Autocorrelation at the even lags 2j < m. Samples an even lag apart have the
+    # same parity: R(2j) is the lag-j autocorrelation of the even-indexed samples
+    # plus that of the odd-indexed ones, from transforms of (n + m)/2 points.
+    nfft = _fft.next_fast_len((n + 1) // 2 + h - 1, real=True)
+    P = _rfft(X[:, 0::2], nfft)
     np.square(P.real, out=P.real)
     np.square(P.imag, out=P.imag)
     P.real += P.imag
+    odd = _rfft(X[:, 1::2], nfft)
+    np.square(odd.real, out=odd.real)
+    P.real += odd.real
+    np.square(odd.imag, out=odd.imag)
+    P.real += odd.imag
+    del odd
     P.imag = 0.0
-    R = _fft.irfft(P, nfft, axis=1, overwrite_x=True)
+    R = _irfft(P, nfft)
     del P
-    j = np.arange(h)
-    G = np.einsum("ri,i->r", R[:, 2 * j], 1.0 / (h - j))
+    G = np.zeros(rows)
+    for lo in range(0, h, CHUNK):
+        j = np.arange(lo, min(lo + CHUNK, h))
+        G += np.einsum("ri,i->r", R[:, lo : lo + j.size], 1.0 / (h - j))
     del R
-    q = np.zeros((rows, n + 1))
-    np.cumsum(X * X, axis=1, out=q[:, 1:])
-    A = X[:, :K] + X[:, m:]
-    total = harmonic * np.einsum("ri,ri->r", A, A)
-    del A
+    q = np.empty((rows, n + 1))
+    q[:, 0] = 0.0
+    np.square(X, out=q[:, 1:])
+    np.cumsum(q[:, 1:], axis=1, out=q[:, 1:])
+    squares = np.zeros(rows)
+    for lo in range(0, h, CHUNK):
+        hi = min(lo + CHUNK, h)
+        # Q[L, L+K) + Q[m-L, m-L+K) for L = lo+1 … hi; the m-L terms run backwards.
+        sq = q[:, lo + 1 + K : hi + 1 + K] - q[:, lo + 1 : hi + 1]
+        sq += q[:, m + K - hi : m + K - lo][:, ::-1]
+        sq -= q[:, m - hi : m - lo][:, ::-1]
+        squares += np.einsum("ri,i->r", sq, 1.0 / np.arange(lo + 1, hi + 1))
+    total = np.zeros(rows)
+    for lo in range(0, K, CHUNK):
+        A = X[:, lo : min(lo + CHUNK, K)] + X[:, m + lo : m + min(lo + CHUNK, K)]
+        total += np.einsum("ri,ri->r", A, A)
+    total *= harmonic
     total -= 2.0 * cross
-    total += np.einsum("ri,i->r", q[:, L + K] - q[:, L] + q[:, m - L + K] - q[:, m - L], inv_l)
+    total += squares
     scale = harmonic * q[:, -1]
     del q
     G -= _edge_sums(X[:, : 2 * h - 1], h)
