@@ -536,3 +536,34 @@ def test_without_matplotlib_everything_but_the_figures_is_written(imu_csv, tmp_p
     assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} == names
     html = (out / "report.html").read_text()
     assert "Figures not made" in html and "sigmatau[plot]" in html
+
+
+def test_stats_chunked_equals_in_memory(tmp_path, capsys):
+    """`stats --chunked` reads one series piecewise (.npy and raw binary with a header) and gives the
+    in-memory numbers; wrong use is a one-line usage error."""
+    import sigmatau
+
+    y = np.random.default_rng(21).standard_normal(50_001)
+    np.save(tmp_path / "y.npy", y)
+    (tmp_path / "y.bin").write_bytes(b"H" * 64 + y.astype("<f4").tobytes())
+    code, out, err = _run(["stats", tmp_path / "y.npy", "--chunked", "--rate", "10", "--stat", "oadev,totdev",
+                           "--chunk-size", "4099", "--csv", "-"], capsys)
+    assert code == 0, err
+    rows = list(csv.DictReader(out.splitlines()))
+    for stat in ("oadev", "totdev"):
+        ref = getattr(sigmatau, stat)(y, rate=10.0)
+        got = [float(r["dev"]) for r in rows if r["statistic"] == stat]
+        np.testing.assert_allclose(got, ref.dev, rtol=1e-12, atol=0)
+        assert [int(r["alpha"]) for r in rows if r["statistic"] == stat] == ref.alpha.astype(int).tolist()
+    code, out, err = _run(["stats", tmp_path / "y.bin", "--chunked", "--dtype", "<f4", "--offset", "64",
+                           "--rate", "10", "--stat", "mdev"], capsys)
+    assert code == 0, err
+    ref = sigmatau.mdev(y.astype("<f4"), rate=10.0)
+    assert "read in chunks" in out and f"{ref.dev[0]:.4e}" in out
+    for argv, pattern in ((["--stat", "oadev"], "--rate"), (["--rate", "1", "--stat", "theo1"], "not theo1")):
+        code, _, err = _run(["stats", tmp_path / "y.npy", "--chunked", *argv], capsys)
+        assert code == 2
+        _one_line_error(err, pattern)
+    code, _, err = _run(["stats", tmp_path / "y.bin", "--chunked", "--rate", "1"], capsys)
+    assert code == 2
+    _one_line_error(err, "--dtype")

@@ -369,10 +369,10 @@ def open_series(path: PathLike, *, dtype: object = None, offset: int = 0, count:
         return from_npy(path, mmap=mmap, chunk_size=chunk_size)
     if suffix in _HDF5_SUFFIXES or dataset is not None:
         if dataset is None:
-            raise ParameterError(f"{Path(os.fspath(path)).name}: give dataset= to read an HDF5 file in chunks")
+            raise ParameterError(f"{Path(os.fspath(path)).name}: give the dataset (dataset=, --dataset) to read an HDF5 file in chunks")
         return from_hdf5(path, dataset, chunk_size=chunk_size)
     if dtype is None:
-        raise ParameterError(f"{Path(os.fspath(path)).name}: give dtype= (e.g. '<f8') to read a raw binary file")
+        raise ParameterError(f"{Path(os.fspath(path)).name}: give the sample type (dtype=, --dtype; e.g. '<f8') to read a raw binary file")
     return from_binary(path, dtype, offset=offset, count=count, chunk_size=chunk_size)
 
 

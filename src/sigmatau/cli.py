@@ -306,6 +306,8 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
     if args.csv and args.csv != "-" and Path(args.csv).exists() and not args.force:
         raise _UsageError(f"{args.csv!r} exists; use --force to replace it")
+    if args.chunked:
+        return _stats_chunked(args)
     log = _read(args, console)
     a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
                     workers=args.workers, progress=console.progress)
@@ -328,6 +330,47 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
             print(f"\n{ch.name} {stat.upper()}: not computed — {why}")
     for w in a.warnings:
         print(f"sigmatau: warning: {w}", file=sys.stderr)
+    return EXIT_OK
+
+
+def _stats_chunked(args: argparse.Namespace) -> int:
+    """``stats --chunked``: one series read piecewise (:mod:`sigmatau.chunked`), never loaded whole."""
+    from . import chunked
+    from .analysis import ChannelAnalysis, _check_statistics
+    from .outputs import statistics_csv
+
+    if args.rate is None:
+        raise _UsageError("--chunked needs --rate (the file has no timestamps)")
+    stats = _check_statistics(args.stat)
+    bad = [s for s in stats if s not in chunked.STATISTICS]
+    if bad:
+        raise _UsageError(f"--chunked computes {', '.join(chunked.STATISTICS)}; not {', '.join(bad)}")
+    dtype = args.data_type or "freq"
+    chunk = args.chunk_size if args.chunk_size is not None else chunked.DEFAULT_CHUNK
+    results = {}
+    with chunked.open_series(args.log, dtype=args.dtype, offset=args.offset, count=args.count,
+                             dataset=args.dataset, chunk_size=chunk) as source:
+        for stat in stats:
+            results[stat] = chunked.compute(stat, source, rate=args.rate, data_type=dtype, taus=args.taus,
+                                            confidence=args.confidence)
+    first = next(iter(results.values()))
+    n = first.n_points - (1 if dtype == "freq" else 0)
+    name = Path(args.log).stem
+    if args.csv:
+        ch = ChannelAnalysis(name=name, group=dtype, unit="", n_samples=n, results=results, skipped={})
+        text = statistics_csv(argparse.Namespace(channels=[ch]))
+        if args.csv == "-":
+            sys.stdout.write(text)
+        else:
+            _atomic_write(Path(args.csv), text.encode())
+            print(f"wrote {args.csv}", file=sys.stderr)
+        return EXIT_OK
+    print(f"{args.log}: {n:,} samples at {args.rate:.6g} Hz, {dtype} data, read in chunks,"
+          f" {args.confidence:.2%} intervals")
+    for stat, r in results.items():
+        print()
+        print(f"{name} {stat.upper()}")
+        print(_stable32_table(r))
     return EXIT_OK
 
 
@@ -586,11 +629,21 @@ def _parser() -> argparse.ArgumentParser:
             examples:
               sigmatau stats phase.dat --data-type phase --rate 1 --stat adev,oadev,mdev,tdev
               sigmatau stats imu.csv --stat oadev,theo1 --csv stats.csv
+              sigmatau stats month.npy --chunked --rate 1000 --stat oadev,mdev,totdev
+              sigmatau stats gyro.bin --chunked --dtype '<f4' --offset 512 --rate 200
             """) + _EPILOG_ERRORS)
     _add_input_options(stats)
     _add_analysis_options(stats, "oadev")
     stats.add_argument("--csv", help="write every table to this CSV file ('-' for stdout) instead of printing")
     stats.add_argument("--force", action="store_true", help="replace an existing CSV file")
+    big = stats.add_argument_group("records larger than memory (sigmatau.chunked)")
+    big.add_argument("--chunked", action="store_true",
+                     help="read one series piecewise instead of loading it: a 1-D .npy, an HDF5 dataset (--dataset)"
+                          " or raw binary (--dtype); adev, oadev, mdev, tdev, hdev, ohdev, totdev; needs --rate")
+    big.add_argument("--dtype", help="raw binary: sample type, e.g. <f8, <f4, >i4")
+    big.add_argument("--offset", type=int, default=0, help="raw binary: header bytes to skip (default 0)")
+    big.add_argument("--count", type=int, help="raw binary: number of samples (default: to the end)")
+    big.add_argument("--chunk-size", type=int, help="samples per read (default 65536)")
     stats.set_defaults(func=_cmd_stats)
 
     sim = sub.add_parser(
@@ -668,16 +721,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         code, msg = EXIT_DATA, str(exc)
         if debug:
             raise
-    except OSError as exc:
-        code, msg = EXIT_DATA, f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc)
-        if debug:
-            raise
     except BrokenPipeError:  # `sigmatau ... | head`: the reader left; not an error of ours
         try:
             sys.stdout = open(os.devnull, "w")
         except OSError:
             pass
         return EXIT_OK
+    except OSError as exc:
+        code, msg = EXIT_DATA, f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc)
+        if debug:
+            raise
     except KeyboardInterrupt:
         print("sigmatau: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
