@@ -159,6 +159,28 @@ def test_rerun_skips_everything_done(fleet, logs, client):
         analyze_many([str(logs / "*.csv")], fleet.out, client=client, statistics="oadev,mdev", figures=None)
 
 
+def test_results_of_other_settings_are_never_reused(logs, client, tmp_path):
+    """A forced rerun of some logs with new settings must not make a later run reuse the others'
+    old-settings results (they are recomputed)."""
+    out = tmp_path / "o"
+    two = [str(logs / "log00.csv"), str(logs / "log01.csv")]
+    analyze_many(two, out, client=client, statistics="oadev", figures=None, progress=False)
+    analyze_many(two[:1], out, client=client, statistics="mdev", figures=None, force=True, progress=False)
+    again = analyze_many(two, out, client=client, statistics="mdev", figures=None, progress=False)
+    assert again.computed == 1 and again.reused == 1
+    for d in _result_dirs(out):
+        assert json.loads((d / "results.json").read_text())["settings"]["statistics"] == ["mdev"]
+
+
+def test_a_foreign_directory_is_not_used_as_out(logs, client, tmp_path):
+    out = tmp_path / "proj"
+    (out / "logs" / ".keepme").mkdir(parents=True)
+    (out / "logs" / ".keepme" / "notes.txt").write_text("important")
+    with pytest.raises(ParameterError, match="not a sigmatau batch directory"):
+        analyze_many([str(logs / "log00.csv")], out, client=client, statistics="oadev", figures=None)
+    assert (out / "logs" / ".keepme" / "notes.txt").read_text() == "important"
+
+
 def test_interrupted_run_resumes_without_duplicates(logs, client, tmp_path):
     out = tmp_path / "out"
     seen: list[str] = []
@@ -238,6 +260,7 @@ def test_cli_on_an_existing_scheduler(logs, client, tmp_path, capsys):
     (["--workers", "0"], "--workers"),
     (["--stat", "bogus"], "unknown statistic"),
     (["--gaps", "split", "--time-unit", "ms", "--columns", "gyro_x", "--rate", "-1"], "rate"),
+    (["--scheduler", "foo"], "not a scheduler address"),
 ])
 def test_cli_usage_errors(logs, tmp_path, capsys, argv, message):
     assert main(["batch", str(logs / "log00.csv"), "--out", str(tmp_path / "o"), *argv]) == 2

@@ -240,18 +240,63 @@ def test_analyze_summary_on_stdout(imu_csv, tmp_path, capsys):
     assert err == ""  # quiet, and no warnings on stderr (flags are in the summary)
 
 
-def test_output_directory_policy(imu_csv, tmp_path, capsys):
+def test_output_directory_policy(imu_csv, tmp_path, capsys, monkeypatch):
     out = tmp_path / "o"
     out.mkdir()
     (out / "keep.txt").write_text("mine")
-    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures"], capsys)
+    base = ["analyze", imu_csv, "--stat", "oadev", "--no-figures"]
+    code, _, err = _run([*base, "--out", out], capsys)
     assert code == 2
     _one_line_error(err, "exists", "--force")
+    # a directory that is not a sigmatau output is never replaced, even with --force
+    code, _, err = _run([*base, "--out", out, "--force"], capsys)
+    assert code == 2
+    _one_line_error(err, "holds no sigmatau results")
     assert (out / "keep.txt").read_text() == "mine"
-    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures", "--force"], capsys)
+    # nor the current directory, its parents or the home directory
+    monkeypatch.chdir(out)
+    for target in (".", "..", str(Path.home())):
+        code, _, err = _run([*base, "--out", target, "--force"], capsys)
+        assert code == 2, target
+        _one_line_error(err, "current directory")
+    assert (out / "keep.txt").read_text() == "mine"
+    monkeypatch.chdir(tmp_path)
+    # a previous output is replaced with --force, as a whole
+    res = tmp_path / "res"
+    assert _run([*base, "--out", res], capsys)[0] == 0
+    (res / "extra.txt").write_text("old")
+    code, _, err = _run([*base, "--out", res, "--force"], capsys)
     assert code == 0, err
-    assert not (out / "keep.txt").exists() and (out / "results.json").exists()
+    assert not (res / "extra.txt").exists() and (res / "results.json").exists()
     _no_partial(tmp_path)
+
+
+def test_channel_names_cannot_escape_the_output_directory(tmp_path, capsys):
+    rng = np.random.default_rng(2)
+    rows = "".join(f"{i / 100},{float(rng.standard_normal())!r},{float(rng.standard_normal())!r}\n"
+                   for i in range(3000))
+    src = _write(tmp_path / "esc.csv", "t,a/../../../escaped,rate a/b\n" + rows)
+    work = tmp_path / "w" / "x"
+    work.mkdir(parents=True)
+    code, out, err = _run(["analyze", src, "--out", work / "o", "--stat", "oadev", "--figures", "png"], capsys)
+    assert code == 0, err
+    assert not list(tmp_path.rglob("escaped*.png")) or all((work / "o") in p.parents
+                                                           for p in tmp_path.rglob("escaped*.png"))
+    pngs = sorted(p.name for p in (work / "o").glob("*.png"))
+    assert len(pngs) == 3 and all("/" not in p for p in pngs)  # σ–τ of the group + two signal figures
+    assert not [p for p in (work / "o").iterdir() if p.is_dir()]
+
+
+def test_stats_csv_never_overwrites_the_input(imu_csv, tmp_path, capsys):
+    import shutil as _sh
+
+    src = tmp_path / "in.csv"
+    _sh.copy(imu_csv, src)
+    before = _digest(src)
+    code, _, err = _run(["stats", src, "--csv", src, "--force"], capsys)
+    assert code == 2
+    _one_line_error(err, "is the input")
+    assert _digest(src) == before
 
 
 def test_force_never_deletes_the_input(tmp_path, imu_csv, capsys):
@@ -259,6 +304,7 @@ def test_force_never_deletes_the_input(tmp_path, imu_csv, capsys):
     folder.mkdir()
     log = folder / "imu.csv"
     shutil.copy(imu_csv, log)
+    (folder / "results.json").write_text("{}")  # looks like a previous output that holds the input
     code, _, err = _run(["analyze", log, "--out", folder, "--force", "--stat", "oadev", "--no-figures"], capsys)
     assert code == 2
     _one_line_error(err, "contains the input")

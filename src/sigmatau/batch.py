@@ -250,16 +250,26 @@ def _write_json(path: Path, data: Any, *, fsync: bool = True) -> None:
     os.replace(tmp, path)
 
 
-def _find_done(logs_dir: Path, sha256: str) -> Optional[Path]:
-    """The finished directory of the content ``sha256``, if any (whatever the file was called)."""
+def _find_done(logs_dir: Path, sha256: str, token: str) -> Optional[Path]:
+    """The finished directory of the content ``sha256`` made with the settings ``token``, if any
+    (whatever the file was called); a result of other settings is not reused."""
     for d in logs_dir.glob(f"*-{sha256[:12]}"):
         try:
             rec = json.loads((d / _RECORD).read_text(encoding="utf-8"))
         except (OSError, ValueError):
             continue
-        if rec.get("sha256") == sha256:
+        if rec.get("sha256") == sha256 and rec.get("settings_token") == token:
             return d
     return None
+
+
+def _stale(final: Path, token: str) -> bool:
+    """``final`` holds a finished result of other settings (to be replaced, not reused)."""
+    try:
+        rec = json.loads((final / _RECORD).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return False
+    return rec.get("settings_token") != token
 
 
 def _publish(staging: Path, final: Path, force: bool) -> bool:
@@ -303,7 +313,7 @@ def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_
             raise io.InputNotFoundError(f"{path}: no such file or directory")
         sha, size = _file_sha256(p)
         if not force:
-            done = _find_done(folder, sha)
+            done = _find_done(folder, sha, token)
             if done is not None:
                 rec = json.loads((done / _RECORD).read_text(encoding="utf-8"))
                 return {**rec, "reused": True}
@@ -319,7 +329,7 @@ def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_
         rec = _record(analysis, path=path, sha256=sha, size=size, name=name, token=token, warns=warns,
                       seconds=time.perf_counter() - t0)
         _write_json(staging / _RECORD, rec)
-        if not _publish(staging, folder / name, force):
+        if not _publish(staging, folder / name, force or _stale(folder / name, token)):
             rec = {**json.loads((folder / name / _RECORD).read_text(encoding="utf-8")), "reused": True}
         return rec
     except Exception as exc:  # every failure is a result: the other logs go on
@@ -401,10 +411,20 @@ class _Lock:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
             except FileExistsError:
                 try:
-                    host, pid = self.path.read_text().split()
-                    alive = host == socket.gethostname() and _pid_alive(int(pid))
-                except (OSError, ValueError):
-                    alive = False
+                    age = time.time() - self.path.stat().st_mtime
+                    text = self.path.read_text()
+                except FileNotFoundError:
+                    continue
+                except OSError:
+                    age, text = 0.0, ""
+                parts = text.split()
+                pid = parts[1] if len(parts) == 2 and parts[1].isdigit() else "?"
+                if pid == "?":  # being written this instant, or unreadable: held unless left for a minute
+                    alive = age < 60
+                elif parts[0] == socket.gethostname():
+                    alive = _pid_alive(int(pid))
+                else:  # another machine's process cannot be checked: its lock holds for a day
+                    alive = age < 86400
                 if alive:
                     raise ParameterError(f"another sigmatau batch (process {pid}) is writing to"
                                          f" {str(self.path.parent)!r}; wait for it or use another --out") from None
@@ -1087,6 +1107,9 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
             c = distributed.Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as exc:
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {_one_line(exc)}") from None
+        except (ValueError, TypeError) as exc:
+            raise ParameterError(f"--scheduler {scheduler!r} is not a scheduler address such as"
+                                 f" tcp://host:8786 ({_one_line(exc)})") from None
         return c, c.close
     n = workers or _cores()
     import dask
@@ -1223,6 +1246,9 @@ def analyze_many(
         raise ParameterError(f"out {str(out_p)!r} exists and is not a directory")
     if not out_p.resolve().parent.is_dir():
         raise ParameterError(f"out {str(out_p)!r}: the parent directory does not exist")
+    if out_p.is_dir() and any(out_p.iterdir()) and not (out_p / "batch.json").is_file():
+        raise ParameterError(f"out {str(out_p)!r} exists, is not empty and is not a sigmatau batch directory"
+                             " (no batch.json); choose another --out")
     out_p.mkdir(exist_ok=True)
     logs_dir = out_p / _LOGS
     logs_dir.mkdir(exist_ok=True)
@@ -1243,7 +1269,8 @@ def analyze_many(
                     rec = json.loads((logs_dir / e["name"] / _RECORD).read_text(encoding="utf-8"))
                 except (OSError, ValueError):
                     rec = None
-                if rec is not None and rec.get("sha256") == e.get("sha256"):
+                if rec is not None and rec.get("sha256") == e.get("sha256") \
+                        and rec.get("settings_token") == token:
                     results[p] = {**rec, "path": p, "reused": True}
                     continue
             todo.append(p)
@@ -1288,6 +1315,8 @@ def analyze_many(
                     cl.cancel([f for f in futures if not f.done()])
             closer()
         for d in logs_dir.glob(".*"):  # leftovers of attempts that died (the lock says we are alone)
+            if not any(tag in d.name for tag in (".staging-", ".partial-", ".old-")):
+                continue
             shutil.rmtree(d, ignore_errors=True) if d.is_dir() else d.unlink(missing_ok=True)
 
         ok: dict[str, dict] = {}

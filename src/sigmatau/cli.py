@@ -231,6 +231,13 @@ def _check_out(args: argparse.Namespace, default: Path) -> Path:
         raise _UsageError(f"output directory {str(out)!r} exists; use --force to replace it")
     if out.exists() and not out.is_dir():
         raise _UsageError(f"--out {str(out)!r} exists and is not a directory")
+    cwd = Path.cwd().resolve()
+    if out.resolve() == cwd or out.resolve() in cwd.parents or out.resolve() == Path.home().resolve():
+        raise _UsageError(f"--out {str(out)!r} is the current directory, one of its parents or the home directory;"
+                          " choose a directory of its own")
+    if out.is_dir() and any(out.iterdir()) and not (out / "results.json").is_file():
+        raise _UsageError(f"--out {str(out)!r} is not empty and holds no sigmatau results; --force replaces only a"
+                          " previous sigmatau output directory")
     for f in args.figures.split(","):
         if f.strip().lower() not in FIGURE_FORMATS:
             raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
@@ -304,8 +311,14 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         return _list_topics(args)
     if not 0 < args.confidence < 1:
         raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
-    if args.csv and args.csv != "-" and Path(args.csv).exists() and not args.force:
-        raise _UsageError(f"{args.csv!r} exists; use --force to replace it")
+    if args.csv and args.csv != "-":
+        target, source = Path(args.csv).resolve(), Path(args.log).resolve()
+        if target == source or source in target.parents:
+            raise _UsageError(f"--csv {args.csv!r} is the input; choose another file")
+        if target.is_dir():
+            raise _UsageError(f"--csv {args.csv!r} is a directory")
+        if target.exists() and not args.force:
+            raise _UsageError(f"{args.csv!r} exists; use --force to replace it")
     if args.chunked:
         return _stats_chunked(args)
     log = _read(args, console)
@@ -691,6 +704,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from .io import InputNotFoundError, MissingDependencyError
     from .outputs import OutputExistsError
 
+    for stream in (sys.stdout, sys.stderr):  # a terminal that cannot show µ or τ gets '?', not a crash
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            try:
+                reconfigure(errors="replace")
+            except (ValueError, OSError):
+                pass
     parser = _parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = "--debug" in argv

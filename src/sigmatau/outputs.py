@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import csv
 import io
+import re
 import json
 import math
 import os
@@ -156,11 +157,24 @@ def _datasheet_for(analysis: Any, group: str, unit: str) -> Optional[dict[str, f
     return out or None
 
 
+def _safe_stem(text: str, taken: set[str]) -> str:
+    """A file stem from a channel or group name: letters, digits, '-', '_' and '.' only, never
+    starting with '.', unique in ``taken`` (names come from the user's file: 'a/../../x' must
+    not write outside the output directory)."""
+    stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", text).lstrip(".") or "channel"
+    out, k = stem, 2
+    while out.lower() in taken:
+        out, k = f"{stem}_{k}", k + 1
+    taken.add(out.lower())
+    return out
+
+
 def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[str, Any]]:
     """Write the figures; return their descriptions (file stem, caption, kind)."""
     from . import plots
 
     made: list[dict[str, Any]] = []
+    taken: set[str] = set()
     for group, chans in analysis.groups().items():
         with_results = [c for c in chans if c.results]
         if not with_results:
@@ -169,7 +183,7 @@ def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[s
         unit = with_results[0].unit
         title = f"{group}: {', '.join(c.name for c in with_results)}"
         fig = plots.sigma_tau_figure(curves, title=title, datasheet=_datasheet_for(analysis, group, unit))
-        stem = f"sigma_tau_{group}"
+        stem = _safe_stem(f"sigma_tau_{group}", taken)
         plots.save_figure(fig, folder / stem, formats=formats)
         made.append({"stem": stem, "kind": "sigma-tau", "group": group,
                      "caption": f"σ–τ of the {group} channels with {analysis.settings['confidence']:.1%} intervals"
@@ -177,7 +191,7 @@ def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[s
     log = analysis.log
     for c in analysis.channels:
         fig = plots.signal_figure(log[c.name], rate=log.rate, name=c.name, unit=c.unit, model=c.model)
-        stem = f"signal_{c.name}"
+        stem = _safe_stem(f"signal_{c.name}", taken)
         plots.save_figure(fig, folder / stem, formats=formats)
         made.append({"stem": stem, "kind": "signal", "group": c.group,
                      "caption": f"{c.name}: time series, power spectral density (Welch) and lag plot"})
@@ -207,7 +221,9 @@ def write_outputs(
         Directory to create. It must not exist unless ``force`` is true, in
         which case it is replaced as a whole once the new one is complete.
     force : bool
-        Replace an existing ``out_dir``.
+        Replace an existing ``out_dir`` that holds a previous output (a
+        ``results.json``) or nothing. The current directory, its parents and
+        the home directory are always refused.
     figures : sequence of {"png", "svg", "pdf"} or None
         Figure formats; None or empty: no figures. The report embeds PNG, so
         PNG is added when the report is made with figures.
@@ -238,6 +254,13 @@ def write_outputs(
         raise OutputExistsError(f"{str(out)!r} exists and is not a directory")
     if out.exists() and not force:
         raise OutputExistsError(f"output directory {str(out)!r} exists; use --force to replace it")
+    cwd = Path.cwd().resolve()
+    if target == cwd or target in cwd.parents or target == Path.home().resolve():
+        raise ParameterError(f"the output directory {str(out)!r} is the current directory, one of its parents or"
+                             " the home directory; choose a directory of its own")
+    if out.exists() and any(out.iterdir()) and not (out / "results.json").is_file():
+        raise OutputExistsError(f"{str(out)!r} is not empty and holds no sigmatau results (no results.json);"
+                                " --force replaces only a previous sigmatau output directory")
     parent = target.parent
     if not parent.is_dir():
         raise ParameterError(f"the parent directory of {str(out)!r} does not exist")
@@ -275,7 +298,12 @@ def write_outputs(
         if out.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=parent))
             os.replace(target, old / "previous")
-            os.replace(tmp, target)
+            try:
+                os.replace(tmp, target)
+            except BaseException:
+                os.replace(old / "previous", target)  # put the previous output back
+                shutil.rmtree(old, ignore_errors=True)
+                raise
             shutil.rmtree(old, ignore_errors=True)
         else:
             os.replace(tmp, target)

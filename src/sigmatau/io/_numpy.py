@@ -100,25 +100,28 @@ def read_npy(path: Path, display: str, opts: Options, progress: Progress) -> Tab
 
 @register("npz", extensions=(".npz",), description="NumPy .npz archive: one array per column, optional rate")
 def read_npz(path: Path, display: str, opts: Options, progress: Progress) -> Table:
-    try:
-        archive = np.load(path, allow_pickle=False)
-    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
-        raise FormatError(f"{display}: not a valid .npz file ({' '.join(str(exc).split())})") from None
-    if not isinstance(archive, np.lib.npyio.NpzFile):
-        raise FormatError(f"{display}: not an .npz archive")
-    with archive:
-        arrays: dict[str, np.ndarray] = {}
-        for key in archive.files:
-            try:
-                arrays[key] = archive[key]
-            except ValueError as exc:
-                if "pickle" in str(exc).lower():
-                    raise FormatError(
-                        f"{display}: array {key!r} holds Python objects, which are never loaded"
-                    ) from None
-                raise FormatError(f"{display}: array {key!r} is corrupt ({' '.join(str(exc).split())})") from None
-            except (OSError, EOFError, zipfile.BadZipFile) as exc:
-                raise FormatError(f"{display}: array {key!r} is corrupt ({' '.join(str(exc).split())})") from None
+    # The file is opened here, not by np.load: numpy leaves its own handle open when the
+    # archive turns out to be corrupt.
+    with open(path, "rb") as fh:
+        try:
+            archive = np.load(fh, allow_pickle=False)
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+            raise FormatError(f"{display}: not a valid .npz file ({' '.join(str(exc).split())})") from None
+        if not isinstance(archive, np.lib.npyio.NpzFile):
+            raise FormatError(f"{display}: not an .npz archive")
+        with archive:
+            arrays: dict[str, np.ndarray] = {}
+            for key in archive.files:
+                try:
+                    arrays[key] = archive[key]
+                except ValueError as exc:
+                    if "pickle" in str(exc).lower():
+                        raise FormatError(
+                            f"{display}: array {key!r} holds Python objects, which are never loaded"
+                        ) from None
+                    raise FormatError(f"{display}: array {key!r} is corrupt ({' '.join(str(exc).split())})") from None
+                except (OSError, EOFError, zipfile.BadZipFile) as exc:
+                    raise FormatError(f"{display}: array {key!r} is corrupt ({' '.join(str(exc).split())})") from None
     rate = None
     for key in RATE_KEYS:
         if key in arrays and arrays[key].ndim == 0 and _numeric_kind(arrays[key]):
