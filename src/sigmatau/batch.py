@@ -1103,11 +1103,18 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
         return client, lambda: None
     distributed = _distributed()
     if scheduler is not None:
+        import dask
+
+        # A Client that fails in its constructor leaves dask's global scheduler set to
+        # "dask.distributed"; put the setting back so later dask work in this process runs.
+        before = dask.config.get("scheduler", None)
         try:
             c = distributed.Client(scheduler, timeout="20s")
         except (OSError, TimeoutError) as exc:
+            dask.config.set(scheduler=before)
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {_one_line(exc)}") from None
         except (ValueError, TypeError) as exc:
+            dask.config.set(scheduler=before)
             raise ParameterError(f"--scheduler {scheduler!r} is not a scheduler address such as"
                                  f" tcp://host:8786 ({_one_line(exc)})") from None
         return c, c.close
