@@ -1103,18 +1103,11 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
         return client, lambda: None
     distributed = _distributed()
     if scheduler is not None:
-        import dask
-
-        # A Client that fails in its constructor leaves dask's global scheduler set to
-        # "dask.distributed"; put the setting back so later dask work in this process runs.
-        before = dask.config.get("scheduler", None)
         try:
-            c = distributed.Client(scheduler, timeout="20s")
+            c = distributed.Client(scheduler, timeout="20s", set_as_default=False)
         except (OSError, TimeoutError) as exc:
-            dask.config.set(scheduler=before)
             raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {_one_line(exc)}") from None
         except (ValueError, TypeError) as exc:
-            dask.config.set(scheduler=before)
             raise ParameterError(f"--scheduler {scheduler!r} is not a scheduler address such as"
                                  f" tcp://host:8786 ({_one_line(exc)})") from None
         return c, c.close
@@ -1132,7 +1125,9 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
                                                dashboard_address=None)
     except Exception as exc:
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {_one_line(exc)}") from None
-    c = distributed.Client(cluster)
+    # Not the process's default client: batch submits through it explicitly, and a default one
+    # would leave dask's global scheduler pointing at a closed cluster afterwards.
+    c = distributed.Client(cluster, set_as_default=False)
 
     def close() -> None:
         c.close()
