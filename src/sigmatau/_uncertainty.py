@@ -17,11 +17,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Literal, Optional, Union
+from typing import Literal, Optional
 
 import numpy as np
 
-from .confidence import EDF_STATISTICS, ONE_SIGMA, deviation_interval, edf_array
+from .confidence import EDF_STATISTICS, deviation_interval, edf_array
 from .errors import DataError, ParameterError
 from .result import StabilityResult
 

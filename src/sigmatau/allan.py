@@ -176,6 +176,16 @@ def _block_sums_by_factor(y: np.ndarray, ms: np.ndarray):
         yield i, m, sums
 
 
+def _window_sums_by_factor(y: np.ndarray, ms: np.ndarray, *, double: bool = False):
+    """Yield ``(index, m, ws)`` over ``ms`` in increasing order, ``ws`` a
+    :class:`~sigmatau._numeric.WindowSums` advanced to m (its arrays are valid until the next step)."""
+    ws = WindowSums(y, double=double)
+    for i in np.argsort(ms, kind="stable"):
+        m = int(ms[i])
+        ws.advance(m)
+        yield i, m, ws
+
+
 def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
@@ -189,10 +199,7 @@ def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
 def _ostdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    ws = WindowSums(y)
-    for i in np.argsort(ms, kind="stable"):
-        m = int(ms[i])
-        ws.advance(m)
+    for i, m, ws in _window_sums_by_factor(y, ms):
         _, ss = centred_sumsq(ws.a)
         var[i] = ss / (float(m) ** 2 * (ws.a.size - 1))
         n[i] = ws.a.size
@@ -213,10 +220,7 @@ def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{i=j}^{j+m-1} (y_{i+m} - y_i) = A_m[j+m] - A_m[j] = Δ²_m x_j / τ0, j = 0 … M-2m
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    ws = WindowSums(y)
-    for i in np.argsort(ms, kind="stable"):
-        m = int(ms[i])
-        ws.advance(m)
+    for i, m, ws in _window_sums_by_factor(y, ms):
         a = ws.a
         k = y.size - 2 * m + 1
         var[i] = sumsq_combination([(1.0, a[m:]), (-1.0, a[:-m])], k) / (2.0 * float(m) ** 2 * k)
@@ -228,10 +232,7 @@ def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{k=j}^{j+m-1} (A_m[k+m] - A_m[k]) = B_m[j+m] - B_m[j], j = 0 … M-3m+1
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    ws = WindowSums(y, double=True)
-    for i in np.argsort(ms, kind="stable"):
-        m = int(ms[i])
-        ws.advance(m)
+    for i, m, ws in _window_sums_by_factor(y, ms, double=True):
         b = ws.b
         k = y.size - 3 * m + 2
         var[i] = sumsq_combination([(1.0, b[m:]), (-1.0, b[:-m])], k) / (2.0 * float(m) ** 4 * k)

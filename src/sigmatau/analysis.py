@@ -235,14 +235,12 @@ class LogAnalysis:
 
 def _model_lines(model: Any) -> str:
     """The model as indented lines: each term in SI and customary units, then the flags."""
-    from .units import pretty
-
     out = []
     for t in TERMS:
         p = getattr(model, t)
         si = p.si()
-        cust = "; ".join(_fmt_param(c, pretty) for c in p.customary())
-        out.append(f"  {t} {_TERM_NAMES[model.kind][t]:<26} {_fmt_param(si, pretty):<44} {cust}")
+        cust = "; ".join(_fmt_param(c) for c in p.customary())
+        out.append(f"  {t} {_TERM_NAMES[model.kind][t]:<26} {_fmt_param(si):<44} {cust}")
     for f in model.flags:
         out.append(f"  ! [{f.code}{' ' + f.term if f.term else ''}] {f.message}")
     return "\n".join(out)
@@ -256,7 +254,10 @@ _TERM_NAMES = {
 }
 
 
-def _fmt_param(p: Any, pretty: Callable[[str], str]) -> str:
+def _fmt_param(p: Any) -> str:
+    """``value [low, high] unit``, ``< bound unit`` when not resolved (terminal and report)."""
+    from .units import pretty
+
     if not p.resolved:
         return f"< {p.high:.3g} {pretty(p.unit)}" if math.isfinite(p.high) else "not resolved"
     return f"{p.value:.4g} [{p.low:.4g}, {p.high:.4g}] {pretty(p.unit)}"

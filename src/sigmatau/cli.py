@@ -305,7 +305,6 @@ def _cmd_demo(args: argparse.Namespace, console: _Console) -> int:
 
 def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
     from .analysis import analyze_log
-    from .outputs import statistics_csv
 
     if args.list_topics:
         return _list_topics(args)
@@ -324,23 +323,8 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
     log = _read(args, console)
     a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
                     workers=args.workers, progress=console.progress)
-    if args.csv:
-        text = statistics_csv(a)
-        if args.csv == "-":
-            sys.stdout.write(text)
-        else:
-            _atomic_write(Path(args.csv), text.encode())
-            print(f"wrote {args.csv}", file=sys.stderr)
-        return EXIT_OK
-    print(f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type} data,"
-          f" {a.settings['confidence']:.2%} intervals")
-    for ch in a.channels:
-        for stat, r in ch.results.items():
-            print()
-            print(f"{ch.name} [{ch.unit or '?'}] {stat.upper()}")
-            print(_stable32_table(r))
-        for stat, why in ch.skipped.items():
-            print(f"\n{ch.name} {stat.upper()}: not computed — {why}")
+    _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
+                                  f" data, {a.settings['confidence']:.2%} intervals")
     for w in a.warnings:
         print(f"sigmatau: warning: {w}", file=sys.stderr)
     return EXIT_OK
@@ -350,7 +334,6 @@ def _stats_chunked(args: argparse.Namespace) -> int:
     """``stats --chunked``: one series read piecewise (:mod:`sigmatau.chunked`), never loaded whole."""
     from . import chunked
     from .analysis import ChannelAnalysis, _check_statistics
-    from .outputs import statistics_csv
 
     if args.rate is None:
         raise _UsageError("--chunked needs --rate (the file has no timestamps)")
@@ -369,22 +352,32 @@ def _stats_chunked(args: argparse.Namespace) -> int:
     first = next(iter(results.values()))
     n = first.n_points - (1 if dtype == "freq" else 0)
     name = Path(args.log).stem
+    ch = ChannelAnalysis(name=name, group=dtype, unit="", n_samples=n, results=results, skipped={})
+    _emit_stats(args, [ch], f"{args.log}: {n:,} samples at {args.rate:.6g} Hz, {dtype} data, read in chunks,"
+                            f" {args.confidence:.2%} intervals")
+    return EXIT_OK
+
+
+def _emit_stats(args: argparse.Namespace, channels: Sequence[Any], header: str) -> None:
+    """The statistics of ``channels`` as Stable32-style tables on stdout, or as CSV (``--csv``)."""
+    from .outputs import statistics_csv
+
     if args.csv:
-        ch = ChannelAnalysis(name=name, group=dtype, unit="", n_samples=n, results=results, skipped={})
-        text = statistics_csv(argparse.Namespace(channels=[ch]))
+        text = statistics_csv(argparse.Namespace(channels=list(channels)))
         if args.csv == "-":
             sys.stdout.write(text)
         else:
             _atomic_write(Path(args.csv), text.encode())
             print(f"wrote {args.csv}", file=sys.stderr)
-        return EXIT_OK
-    print(f"{args.log}: {n:,} samples at {args.rate:.6g} Hz, {dtype} data, read in chunks,"
-          f" {args.confidence:.2%} intervals")
-    for stat, r in results.items():
-        print()
-        print(f"{name} {stat.upper()}")
-        print(_stable32_table(r))
-    return EXIT_OK
+        return
+    print(header)
+    for ch in channels:
+        for stat, r in ch.results.items():
+            print()
+            print(f"{ch.name} [{ch.unit or '?'}] {stat.upper()}")
+            print(_stable32_table(r))
+        for stat, why in ch.skipped.items():
+            print(f"\n{ch.name} {stat.upper()}: not computed — {why}")
 
 
 def _stable32_table(r: Any) -> str:
@@ -404,6 +397,8 @@ def _stable32_table(r: Any) -> str:
 
 def _atomic_write(path: Path, data: bytes) -> None:
     """Write through a temporary file in the same directory and rename it into place."""
+    from .outputs import umask
+
     parent = path.resolve().parent
     if not parent.is_dir():
         raise _UsageError(f"{str(path)!r}: the directory does not exist")
@@ -411,18 +406,12 @@ def _atomic_write(path: Path, data: bytes) -> None:
     try:
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
-        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file the usual mode
+        os.chmod(tmp, 0o666 & ~umask())  # mkstemp makes 0600; give the file the usual mode
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
 
 
 def _coef(text: Optional[str], group: str, term: str, unit: str) -> Optional[float]:

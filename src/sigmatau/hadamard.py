@@ -14,8 +14,8 @@ from ._driver import Statistic, run
 from ._input import DataType
 from ._uncertainty import CiMethod
 from .confidence import ONE_SIGMA
-from ._numeric import WindowSums, sumsq_combination
-from .allan import _block_sums_by_factor, _doc
+from ._numeric import sumsq_combination
+from .allan import _block_sums_by_factor, _doc, _window_sums_by_factor
 from .result import StabilityResult
 
 __all__ = ["hdev", "ohdev"]
@@ -58,10 +58,7 @@ def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = A_m[j+2m] - 2A_m[j+m] + A_m[j] = Δ³_m x_j / τ0
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    ws = WindowSums(y)
-    for i in np.argsort(ms, kind="stable"):
-        m = int(ms[i])
-        ws.advance(m)
+    for i, m, ws in _window_sums_by_factor(y, ms):
         a = ws.a
         k = y.size - 3 * m + 1
         var[i] = sumsq_combination([(1.0, a[2 * m :]), (-2.0, a[m:-m]), (1.0, a[: -2 * m])], k) / (

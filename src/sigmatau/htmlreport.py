@@ -54,9 +54,9 @@ def _pretty(unit: str) -> str:
 
 
 def _param(p: Any) -> str:
-    if not p.resolved:
-        return f"&lt; {_num(p.high, '.3g')} {_e(_pretty(p.unit))}" if math.isfinite(p.high) else "not resolved"
-    return f"{_num(p.value)} [{_num(p.low)}, {_num(p.high)}] {_e(_pretty(p.unit))}"
+    from .analysis import _fmt_param
+
+    return _e(_fmt_param(p))
 
 
 def _input_section(a: Any) -> str:

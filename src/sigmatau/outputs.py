@@ -45,6 +45,13 @@ class OutputExistsError(SigmaTauError, FileExistsError):
     """The output directory exists and ``force`` was not given."""
 
 
+def umask() -> int:
+    """The process's file-creation mask (tempfile makes 0600/0700; outputs get the usual modes)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _g(v: Any) -> str:
     if v is None:
         return ""
@@ -292,9 +299,7 @@ def write_outputs(
 
             _write_text(tmp / "report.html", render(analysis, figures=figs, folder=tmp, yaml_text=yaml_text,
                                                     figure_note=figure_note))
-        mask = os.umask(0)
-        os.umask(mask)
-        os.chmod(tmp, 0o777 & ~mask)  # mkdtemp makes 0700; give the folder the usual mode
+        os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700; give the folder the usual mode
         if out.exists():
             old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old-", dir=parent))
             os.replace(target, old / "previous")
