@@ -1,0 +1,140 @@
+"""Every ``sigmatau`` command the README prints runs, as printed, in a shell.
+
+The commands are read from README.md itself (indented code lines and inline code spans that are
+whole commands), so a command added to or changed in the README is exercised here or fails
+``test_every_readme_command_is_exercised``. Each runs through ``bash -c`` exactly as printed, in
+an empty temporary directory prepared with the input files the command names, with the
+``sigmatau`` of this environment first on PATH and no Dask client in this process.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+BIN = Path(sys.executable).parent
+
+
+def readme_commands() -> list[str]:
+    """Whole ``sigmatau`` commands printed in the README (synopsis lines with ``[…]`` excluded)."""
+    text = README.read_text(encoding="utf-8")
+    text = re.sub(r"^```.*?^```", "", text, flags=re.S | re.M)  # fenced blocks: synopsis, doctests
+    found: list[str] = []
+    for line in text.splitlines():
+        if line.startswith("    ") and "sigmatau " in line:
+            cmd = line.strip().split("  #")[0].strip()
+            found.append(cmd)
+    for span in re.findall(r"`(sigmatau [^`]+)`", text):
+        if " --" in span and not re.search(r"[\[|…]|\.\.\.", span):
+            found.append(span.strip())
+    return list(dict.fromkeys(found))
+
+
+def _shell(cmd: str, cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess:
+    env = dict(os.environ, PATH=f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}")
+    env.pop("DASK_SCHEDULER_ADDRESS", None)
+    return subprocess.run(["bash", "-c", cmd], cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+def _ok(cmd: str, cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess:
+    r = _shell(cmd, cwd, timeout)
+    assert r.returncode == 0, f"{cmd!r} exited {r.returncode}:\n{r.stderr[-3000:]}"
+    assert "Traceback" not in r.stderr
+    return r
+
+
+DEMO = 'python -m pip install -e ".[plot]" && sigmatau demo'
+TOUR = [
+    "sigmatau simulate imu.csv --preset lsm6dsl --duration 1800",
+    "sigmatau analyze imu.csv --out imu-report --no-figures",
+    "sigmatau stats imu.csv --stat oadev,mdev --columns gyro_x",
+]
+BATCH = "sigmatau batch 'line3/*.csv' --out line3-fleet --limits lsm6dsl"
+BATCH_CLUSTER = ("sigmatau batch '/data/line3/*.csv' --out /data/line3-fleet "
+                 "--scheduler tcp://10.0.0.5:8786")
+CHUNKED = "sigmatau stats month.npy --chunked --rate 1000 --stat oadev,mdev,totdev"
+HELP = "sigmatau COMMAND --help"
+EXERCISED = {DEMO, *TOUR, BATCH, BATCH_CLUSTER, CHUNKED, HELP}
+
+
+def test_every_readme_command_is_exercised():
+    commands = readme_commands()
+    assert set(commands) == EXERCISED, (
+        f"README commands not exercised here: {sorted(set(commands) - EXERCISED)}; "
+        f"exercised but no longer in the README: {sorted(EXERCISED - set(commands))}")
+
+
+@pytest.mark.slow
+def test_readme_demo(tmp_path):
+    install, demo = (part.strip() for part in DEMO.split("&&"))
+    assert install == 'python -m pip install -e ".[plot]"'  # this environment has it (and more)
+    r = _ok(demo, tmp_path)
+    out = tmp_path / "sigmatau-demo"
+    for name in ("results.json", "statistics.csv", "model.csv", "report.html"):
+        assert (out / name).is_file(), name
+    assert "gyro" in r.stdout
+
+
+def test_readme_tour(tmp_path):
+    for cmd in TOUR:
+        r = _ok(cmd, tmp_path)
+    results = json.loads((tmp_path / "imu-report" / "results.json").read_text(encoding="utf-8"))
+    assert results["channels"]
+    # the last command prints Stable32-style tables of gyro_x only
+    assert "gyro_x" in r.stdout and "oadev" in r.stdout.lower() and "mdev" in r.stdout.lower()
+    assert "gyro_y" not in r.stdout
+
+
+def _line3(tmp_path: Path) -> None:
+    (tmp_path / "line3").mkdir()
+    for seed in range(3):
+        _ok(f"sigmatau simulate line3/part{seed}.csv --preset lsm6dsl --duration 600 --seed {seed}",
+            tmp_path)
+
+
+@pytest.mark.slow
+def test_readme_batch_default_cluster(tmp_path):
+    _line3(tmp_path)
+    _ok(BATCH, tmp_path)
+    fleet = tmp_path / "line3-fleet"
+    for name in ("fleet.html", "fleet.csv", "fleet_logs.csv", "fleet.json", "index.jsonl"):
+        assert (fleet / name).is_file(), name
+    assert len(list((fleet / "logs").iterdir())) == 3
+    assert not list(fleet.rglob("*.partial*"))
+
+
+@pytest.mark.slow
+def test_readme_batch_existing_scheduler(tmp_path):
+    """The README's cluster example with its paths and address replaced by real ones here."""
+    distributed = pytest.importorskip("distributed")
+    _line3(tmp_path)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                  dashboard_address=None, host="127.0.0.1") as cluster:
+        cmd = (BATCH_CLUSTER.replace("/data/line3-fleet", str(tmp_path / "fleet"))
+               .replace("/data/line3", str(tmp_path / "line3"))
+               .replace("tcp://10.0.0.5:8786", cluster.scheduler_address))
+        _ok(cmd, tmp_path)
+    assert len(list((tmp_path / "fleet" / "logs").iterdir())) == 3
+
+
+@pytest.mark.parametrize("command", ["demo", "analyze", "stats", "simulate", "batch"])
+def test_readme_help(tmp_path, command):
+    r = _ok(HELP.replace("COMMAND", command), tmp_path, timeout=120)
+    assert "examples:" in r.stdout and "exit codes" in r.stdout
+
+
+def test_readme_chunked_stats(tmp_path):
+    rng = np.random.default_rng(20261124)
+    np.save(tmp_path / "month.npy", rng.standard_normal(200_000))
+    r = _ok(CHUNKED, tmp_path)
+    low = r.stdout.lower()
+    assert "oadev" in low and "mdev" in low and "totdev" in low
