@@ -422,7 +422,8 @@ def test_stats_table_matches_the_library(tmp_path, capsys):
     code, _, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--stat", "mdev", "--csv", csv_path],
                         capsys)
     assert code == 0, err
-    rows = list(csv.DictReader(open(csv_path)))
+    with open(csv_path, encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
     assert rows[0]["statistic"] == "mdev" and float(rows[0]["dev"]) == pytest.approx(
         sigmatau.mdev(y).dev[0], rel=1e-15)
     code, _, err = _run(["stats", src, "--data-type", "freq", "--rate", "1", "--csv", csv_path], capsys)

@@ -23,10 +23,11 @@ from __future__ import annotations
 
 import csv
 import io
-import re
 import json
 import math
+import numbers
 import os
+import re
 import shutil
 import tempfile
 import warnings
@@ -35,7 +36,8 @@ from typing import Any, Optional, Sequence, Union
 
 from .errors import ParameterError, SigmaTauError, SigmaTauWarning
 
-__all__ = ["write_outputs", "kalibr_yaml", "statistics_csv", "model_csv", "OutputExistsError", "FIGURE_FORMATS"]
+__all__ = ["write_outputs", "kalibr_yaml", "statistics_csv", "model_csv", "csv_cell", "OutputExistsError",
+           "FIGURE_FORMATS"]
 
 #: Figure formats :func:`write_outputs` can write.
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -52,11 +54,55 @@ def umask() -> int:
     return mask
 
 
-def _g(v: Any) -> str:
-    if v is None:
+#: First characters that make a spreadsheet read a text cell as a formula (OWASP, "CSV Injection").
+FORMULA_TRIGGERS = ("=", "+", "-", "@", "\t", "\r", "\n")
+
+
+def csv_cell(value: Any) -> str:
+    """One CSV cell that a spreadsheet shows as the value and never evaluates.
+
+    Numbers are written unchanged (``repr`` of the float: round-trips exactly;
+    NaN, inf and None give an empty cell). Text that starts with ``=``, ``+``,
+    ``-``, ``@``, tab, CR or LF — which Excel, LibreOffice and Google Sheets
+    would run as a formula — gets a leading ``'``, the OWASP rule.
+
+    Parameters
+    ----------
+    value : str, number, bool or None
+
+    Returns
+    -------
+    str
+
+    References
+    ----------
+    OWASP, "CSV Injection", https://owasp.org/www-community/attacks/CSV_Injection
+
+    Examples
+    --------
+    >>> csv_cell("=1+2"), csv_cell("@SUM(A1)"), csv_cell(-1.5), csv_cell("gyro_x"), csv_cell(None)
+    ("'=1+2", "'@SUM(A1)", '-1.5', 'gyro_x', '')
+    """
+    if value is None:
         return ""
-    v = float(v)
-    return repr(v) if math.isfinite(v) else ""
+    if isinstance(value, bool):
+        return str(value)
+    if isinstance(value, numbers.Integral):
+        return str(int(value))
+    if isinstance(value, numbers.Real):
+        v = float(value)
+        return repr(v) if math.isfinite(v) else ""
+    text = str(value)
+    return "'" + text if text.startswith(FORMULA_TRIGGERS) else text
+
+
+def _g(v: Any) -> Optional[float]:
+    """A float for :func:`csv_cell` (None stays None: an empty cell)."""
+    return None if v is None else float(v)
+
+
+def _row(cells: Sequence[Any]) -> list[str]:
+    return [csv_cell(c) for c in cells]
 
 
 def statistics_csv(analysis: Any) -> str:
@@ -73,12 +119,12 @@ def statistics_csv(analysis: Any) -> str:
         for stat, r in ch.results.items():
             for i in range(len(r.taus)):
                 alpha = r.alpha[i] if r.alpha is not None else math.nan
-                w.writerow([ch.name, ch.group, ch.unit, stat, int(r.m[i]), _g(r.taus[i]), int(r.n[i]),
+                w.writerow(_row([ch.name, ch.group, ch.unit, stat, int(r.m[i]), _g(r.taus[i]), int(r.n[i]),
                             "" if not math.isfinite(alpha) else int(alpha),
                             _g(r.edf[i]) if r.edf is not None else "",
                             _g(r.ci_low[i]) if r.ci_low is not None else "", _g(r.dev[i]),
                             _g(r.ci_high[i]) if r.ci_high is not None else "",
-                            _g(r.confidence) if r.confidence is not None else "", r.bias])
+                            _g(r.confidence) if r.confidence is not None else "", r.bias]))
     return buf.getvalue()
 
 
@@ -102,10 +148,10 @@ def model_csv(analysis: Any) -> str:
             ro = m.readoff.get(t)
             for kind, q in [("samples", p), ("si", p.si())] + [("customary", c) for c in p.customary()]:
                 r = ro.to(q.unit) if ro is not None else None
-                w.writerow([ch.name, m.kind, t, kind, q.unit, q.resolved, _g(q.value) if q.resolved else "",
+                w.writerow(_row([ch.name, m.kind, t, kind, q.unit, q.resolved, _g(q.value) if q.resolved else "",
                             _g(q.low), _g(q.high), _g(q.confidence), q.method,
                             _g(r.value) if r is not None and r.resolved else "",
-                            _g(r.low) if r is not None else "", _g(r.high) if r is not None else ""])
+                            _g(r.low) if r is not None else "", _g(r.high) if r is not None else ""]))
     return buf.getvalue()
 
 
