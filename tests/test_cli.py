@@ -569,6 +569,7 @@ def test_datasheet_numbers_and_units(imu_csv, tmp_path, capsys):
     _one_line_error(err, "gyro.N")
 
 
+@pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
 def test_without_matplotlib_everything_but_the_figures_is_written(imu_csv, tmp_path, capsys, monkeypatch):
     """`pip install sigmatau` without the plot extra: a warning names the extra, the rest is written."""
     for name in [m for m in sys.modules if m == "matplotlib" or m.startswith("matplotlib.")]:

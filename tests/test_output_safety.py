@@ -86,3 +86,102 @@ def test_csv_outputs_never_start_a_formula(tmp_path, capsys, rng):
                     float(cell)
                 except ValueError:
                     assert not cell.startswith(FORMULA_START), cell
+
+
+# ------------------------------------------------------------------------ imu.yaml
+
+yaml = pytest.importorskip("yaml")
+
+PWN = '!!python/object/apply:os.system ["touch PWNED"]'
+HOSTILE_NAMES = [
+    "/imu0\nupdate_rate: 1.0\ngyroscope_noise_density: 0",  # a newline adds or overrides keys
+    "/imu: 0", "/it's \"quoted\"", "/tab\there", PWN, "/ジャイロ/ü", "/nel\x85gyroscope_random_walk: 0",
+    "/ls\u2028rostopic: x", "/cr\rupdate_rate: 2", "/esc\x1b[2J", "# not a comment", "&a *a", "- item",
+    "{update_rate: 3}", "---", "%YAML 1.1", "/bidi\u202eevil",
+]
+EXPECTED_KEYS = ["accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
+                 "gyroscope_random_walk", "rostopic", "update_rate"]
+
+
+@pytest.fixture(scope="module")
+def imu_analysis():
+    """A 6-axis simulated log (2 min at 50 Hz, seed 11) analysed with OADEV only."""
+    from sigmatau.analysis import analyze_log, log_from_arrays
+    from sigmatau.imu import simulate
+
+    streams = np.random.SeedSequence(11).spawn(6)
+    chans = {f"{g}_{a}": simulate(f"lsm6dsl-{g}", duration=120, rate=50, rng=np.random.default_rng(s))
+             for (g, a), s in zip([(g, a) for g in ("gyro", "accel") for a in "xyz"], streams)}
+    units = {k: "rad/s" if k.startswith("gyro") else "m/s^2" for k in chans}
+    log = log_from_arrays(chans, rate=50, units=units, name="sim")
+    return analyze_log(log, statistics="oadev", workers=1)
+
+
+def _hostile(analysis, name: str):
+    """The same analysis with ``name`` as its file name, bag topic and rostopic."""
+    import dataclasses
+
+    src = dataclasses.replace(analysis.log.source, path=name, topic=name)
+    return dataclasses.replace(analysis, log=dataclasses.replace(analysis.log, source=src),
+                               kalibr={**analysis.kalibr, "rostopic": name})
+
+
+def _load_both(text: str) -> tuple[dict, dict]:
+    return yaml.safe_load(text), yaml.load(text, Loader=yaml.Loader)  # noqa: S506 - the point of the test
+
+
+@pytest.mark.parametrize("name", HOSTILE_NAMES)
+def test_imu_yaml_round_trips_hostile_names(imu_analysis, name, tmp_path, monkeypatch):
+    from sigmatau.outputs import kalibr_yaml
+
+    monkeypatch.chdir(tmp_path)  # where an executed "touch PWNED" would leave its file
+    text = kalibr_yaml(_hostile(imu_analysis, name))
+    for doc in _load_both(text):
+        assert list(doc) == EXPECTED_KEYS
+        assert doc["rostopic"] == name
+        assert doc["update_rate"] == 50.0
+        for key in EXPECTED_KEYS[:4]:
+            assert isinstance(doc[key], float) and doc[key] == pytest.approx(imu_analysis.kalibr[key], rel=1e-15)
+    assert not (tmp_path / "PWNED").exists()
+    for line in text.splitlines():  # every line is a comment or one of our keys
+        assert line.startswith("#") or line.split(":")[0] in EXPECTED_KEYS, line
+        assert "\x1b" not in line and "\u202e" not in line
+
+
+def test_imu_yaml_from_the_command_line_with_a_hostile_file_name(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    rng = np.random.default_rng(12)
+    name = 'log\nupdate_rate: 1\n: "x" \t!!python ü.csv'
+    src = _log(tmp_path / name, [f"{g}_{a}" for g in ("gyro", "accel") for a in "xyz"], rng, n=6000)
+    code, _, err = _run(["analyze", src, "--out", tmp_path / "o", "--no-figures", "--no-report", "--stat", "oadev",
+                         "--rostopic", PWN + " '\": ü", "--quiet"], capsys)
+    assert code == 0, err
+    text = (tmp_path / "o" / "imu.yaml").read_text(encoding="utf-8")
+    for doc in _load_both(text):
+        assert list(doc) == EXPECTED_KEYS
+        assert doc["rostopic"] == PWN + " '\": ü" and doc["update_rate"] == 100.0
+    assert not (tmp_path / "PWNED").exists()
+
+
+@pytest.mark.parametrize("topic", ["/imu0\nupdate_rate: 1", "/imu\t0", "/imu\x1b[2J", "/imu\x85", "/a\rb"])
+def test_rostopic_with_control_characters_is_refused(topic, tmp_path, capsys):
+    src = _log(tmp_path / "l.csv", ["gyro_x", "gyro_y", "gyro_z"], np.random.default_rng(13), n=500)
+    code, _, err = _run(["analyze", src, "--out", tmp_path / "o", "--no-figures", "--rostopic", topic], capsys)
+    assert code == 2
+    _one_line_error(err, "--rostopic", "control character")
+    assert "\x1b" not in err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
+def test_without_pyyaml_imu_yaml_is_skipped_with_one_warning(tmp_path, capsys, monkeypatch):
+    for name in [m for m in sys.modules if m == "yaml" or m.startswith("yaml.")]:
+        monkeypatch.delitem(sys.modules, name)
+    monkeypatch.setitem(sys.modules, "yaml", None)  # import yaml -> ImportError
+    src = _log(tmp_path / "l.csv", [f"{g}_{a}" for g in ("gyro", "accel") for a in "xyz"],
+               np.random.default_rng(14), n=6000)
+    code, _, err = _run(["analyze", src, "--out", tmp_path / "o", "--no-figures", "--stat", "oadev", "--quiet"],
+                        capsys)
+    assert code == 0, err
+    warns = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(warns) == 1 and "imu.yaml not written" in warns[0] and "sigmatau[yaml]" in warns[0], err
+    assert not (tmp_path / "o" / "imu.yaml").exists() and (tmp_path / "o" / "model.csv").exists()

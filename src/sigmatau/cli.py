@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any, NoReturn, Optional, Sequence
 
 from . import __version__
+from .outputs import printable
 
 __all__ = ["main"]
 
@@ -245,6 +246,9 @@ def _check_out(args: argparse.Namespace, default: Path) -> Path:
         raise _UsageError(f"--out {str(out)!r}: the parent directory does not exist")
     if not 0 < args.confidence < 1:
         raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    if printable(args.rostopic) != args.rostopic:  # it goes into imu.yaml: one line, as ROS names are
+        raise _UsageError(f"--rostopic '{printable(args.rostopic)}' contains a control character (newline, tab,"
+                          " escape, …); give the topic name alone")
     return out
 
 

@@ -36,8 +36,8 @@ from typing import Any, Optional, Sequence, Union
 
 from .errors import ParameterError, SigmaTauError, SigmaTauWarning
 
-__all__ = ["write_outputs", "kalibr_yaml", "statistics_csv", "model_csv", "csv_cell", "OutputExistsError",
-           "FIGURE_FORMATS"]
+__all__ = ["write_outputs", "kalibr_yaml", "statistics_csv", "model_csv", "csv_cell", "printable", "OutputExistsError",
+           "FIGURE_FORMATS", "KALIBR_KEYS"]
 
 #: Figure formats :func:`write_outputs` can write.
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -155,43 +155,153 @@ def model_csv(analysis: Any) -> str:
     return buf.getvalue()
 
 
+#: Characters that end a line or drive a terminal: C0 (tab and newline included), DEL, C1 (NEL
+#: included), the Unicode line and paragraph separators (line breaks for YAML 1.1) and the
+#: bidirectional overrides that reorder what a reader sees ("Trojan Source").
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+_CONTROL_KEEP_NEWLINE = re.compile("[\x00-\x09\x0b-\x1f\x7f-\x9f\u2028\u2029\u202a-\u202e\u2066-\u2069]")
+_NAMED = {"\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def _escape_char(match: "re.Match[str]") -> str:
+    ch = match.group(0)
+    if ch in _NAMED:
+        return _NAMED[ch]
+    code = ord(ch)
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}"
+
+
+def printable(text: Any, *, multiline: bool = False) -> str:
+    """``text`` with every control character shown as a Python escape (``\\x1b``, ``\\n``).
+
+    For text that reaches a terminal or a one-line comment: names and messages
+    come from the user's files, and an escape sequence (ESC, CSI, OSC), a
+    carriage return or a bidirectional override in them must not drive the
+    terminal or add lines. Escaped: C0 (U+0000–U+001F, tab included), DEL,
+    C1 (U+0080–U+009F), U+2028/U+2029 and the bidirectional controls
+    U+202A–U+202E, U+2066–U+2069.
+
+    Parameters
+    ----------
+    text : object
+        Converted with ``str``.
+    multiline : bool
+        Keep ``\\n`` (text of ours made of several lines, such as the summary).
+
+    Returns
+    -------
+    str
+
+    Examples
+    --------
+    >>> printable("gyro\\x1b[2Jx\\nupdate_rate: 1")
+    'gyro\\\\x1b[2Jx\\\\nupdate_rate: 1'
+    >>> printable("a\\nb", multiline=True)
+    'a\\nb'
+    """
+    pattern = _CONTROL_KEEP_NEWLINE if multiline else _CONTROL
+    return pattern.sub(_escape_char, str(text))
+
+
+KALIBR_KEYS = ("accelerometer_noise_density", "accelerometer_random_walk", "gyroscope_noise_density",
+               "gyroscope_random_walk")
+
+
+def _yaml_module() -> Any:
+    """PyYAML, or a MissingDependencyError naming the extra."""
+    try:
+        import yaml
+    except ImportError:
+        from .io import MissingDependencyError
+
+        raise MissingDependencyError('imu.yaml needs PyYAML: pip install "sigmatau[yaml]"') from None
+    return yaml
+
+
+def _one_line_dumper(yaml: Any) -> Any:
+    """PyYAML's SafeDumper writing any string with a control character double-quoted and escaped.
+
+    Single-quoted and plain scalars may span lines; the double-quoted style
+    escapes line breaks, and ``allow_unicode=False`` escapes everything outside
+    ASCII (ROS names are ASCII), so each key stays on one line.
+    """
+
+    class OneLineDumper(yaml.SafeDumper):
+        pass
+
+    def represent_str(dumper: Any, value: str) -> Any:
+        style = '"' if _CONTROL.search(value) else None
+        return dumper.represent_scalar("tag:yaml.org,2002:str", value, style=style)
+
+    OneLineDumper.add_representer(str, represent_str)
+    return OneLineDumper
+
+
 def kalibr_yaml(analysis: Any) -> str:
     """The Kalibr ``imu.yaml`` text of an analysis with gyroscope and accelerometer models.
 
     The four Kalibr keys (continuous-time noise densities and random walks, SI),
-    ``rostopic`` and ``update_rate``, with comments that state the source file,
-    how the axes were combined and each axis's value, which values are upper
-    bounds of unresolved terms, and the discrete-time equivalents
-    ``σ_d = N·√f`` and ``σ_bd = K/√f`` (Kalibr wiki, "IMU Noise Model").
+    ``rostopic`` and ``update_rate``, written by PyYAML's safe dumper (names
+    from the user's files can hold newlines, ``: ``, quotes or ``!!`` tags and
+    must stay one string), with comments that state the source file, how the
+    axes were combined and each axis's value, which values are upper bounds of
+    unresolved terms, and the discrete-time equivalents ``σ_d = N·√f`` and
+    ``σ_bd = K/√f`` (Kalibr wiki, "IMU Noise Model"). Every name in a comment
+    has its control characters escaped (:func:`printable`), so no comment can
+    end its line.
+
+    Raises
+    ------
+    ParameterError
+        The analysis has no Kalibr entry.
+    MissingDependencyError
+        PyYAML is not installed (extra ``yaml``).
     """
     k = analysis.kalibr
     if k is None:
         raise ParameterError(f"no Kalibr entry: {analysis.kalibr_note or 'no IMU model'}")
+    yaml = _yaml_module()
     src = analysis.log.source
-    lines = [
-        f"# IMU noise model for Kalibr, written by sigmatau {analysis.version}",
-        f"# input: {src.path} ({src.format}{', topic ' + src.topic if src.topic else ''}), sha256 {src.sha256}",
-        f"# axes combined: {k['axis_rule']}; inflation factor {k['inflation']:g}",
-        "# continuous-time values (densities), SI units; Kalibr discretises them with update_rate",
+    topic = f", topic {src.topic}" if src.topic else ""
+    head = [
+        f"IMU noise model for Kalibr, written by sigmatau {analysis.version}",
+        f"input: {src.path} ({src.format}{topic}), sha256 {src.sha256}",
+        f"axes combined: {k['axis_rule']}; inflation factor {k['inflation']:g}",
+        "continuous-time values (densities), SI units; Kalibr discretises them with update_rate",
     ]
     units = k["units"]
-    for sensor, axes_key in (("accelerometer", "accelerometer"), ("gyroscope", "gyroscope")):
-        lines.append(f"#{sensor.capitalize()}s")
-        for suffix in ("noise_density", "random_walk"):
-            key = f"{sensor}_{suffix}"
-            names = k.get("axes", {}).get(axes_key, [])
-            per = ", ".join(f"{n} {v:.4g}" if v is not None else f"{n} -" for n, v in zip(names, k["per_axis"][key]))
-            bound = any(b.startswith(key) for b in k["bounds_used"])
-            what = "noise density (continuous time)" if suffix == "noise_density" else "bias random walk"
-            note = "; includes upper bounds of unresolved axes" if bound else ""
-            lines.append(f"{key}: {k[key]:.6e}  # {what} [{units[key]}]; per axis: {per}{note}")
-    lines.append(f"rostopic: {k['rostopic']}  # the IMU topic")
-    lines.append(f"update_rate: {float(k['update_rate'])!r}  # Hz, for discretisation of the values above")
+    for key in KALIBR_KEYS:
+        sensor, _, suffix = key.partition("_")
+        names = k.get("axes", {}).get(sensor, [])
+        per = ", ".join(f"{n} {v:.4g}" if v is not None else f"{n} -" for n, v in zip(names, k["per_axis"][key]))
+        what = "noise density (continuous time)" if suffix == "noise_density" else "bias random walk"
+        note = "; includes upper bounds of unresolved axes" if any(b.startswith(key) for b in k["bounds_used"]) else ""
+        head.append(f"{key}: {k[key]:.6e}, {what} [{units[key]}]; per axis: {per}{note}")
+    head.append("rostopic: the IMU topic; update_rate: Hz, for discretisation of the values above")
+    data = {key: float(k[key]) for key in KALIBR_KEYS}
+    data["rostopic"] = str(k["rostopic"])
+    data["update_rate"] = float(k["update_rate"])
+    body = yaml.dump(data, Dumper=_one_line_dumper(yaml), sort_keys=False, allow_unicode=False,
+                     default_flow_style=False, width=1 << 30)
     d = k["discrete"]
-    lines.append(f"# discrete-time equivalents at {float(k['update_rate']):g} Hz (standard deviations, not densities):")
-    for key in ("accelerometer_sigma_d", "accelerometer_sigma_bd", "gyroscope_sigma_d", "gyroscope_sigma_bd"):
-        lines.append(f"#   {key}: {d[key]:.6e}")
-    return "\n".join(lines) + "\n"
+    tail = [f"discrete-time equivalents at {float(k['update_rate']):g} Hz (standard deviations, not densities):"]
+    tail += [f"  {key}: {d[key]:.6e}" for key in ("accelerometer_sigma_d", "accelerometer_sigma_bd",
+                                                   "gyroscope_sigma_d", "gyroscope_sigma_bd")]
+    comment = "".join(f"# {printable(line)}\n" for line in head)
+    return comment + body + "".join(f"# {printable(line)}\n" for line in tail)
+
+
+def _kalibr_text(analysis: Any) -> Optional[str]:
+    """The imu.yaml text; None without a Kalibr entry or, with one warning, without PyYAML."""
+    from .io import MissingDependencyError
+
+    if analysis.kalibr is None:
+        return None
+    try:
+        return kalibr_yaml(analysis)
+    except MissingDependencyError as exc:  # everything else is still useful
+        warnings.warn(f"imu.yaml not written: {exc}", SigmaTauWarning, stacklevel=3)
+        return None
 
 
 def _datasheet_for(analysis: Any, group: str, unit: str) -> Optional[dict[str, float]]:
@@ -337,7 +447,7 @@ def write_outputs(
         _write_text(tmp / "statistics.csv", statistics_csv(analysis))
         if any(c.model is not None for c in analysis.channels):
             _write_text(tmp / "model.csv", model_csv(analysis))
-        yaml_text = kalibr_yaml(analysis) if analysis.kalibr is not None else None
+        yaml_text = _kalibr_text(analysis)
         if yaml_text is not None:
             _write_text(tmp / "imu.yaml", yaml_text)
         if report:
