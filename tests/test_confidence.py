@@ -101,6 +101,30 @@ def test_nbs_htot_m10_uses_formula_with_frequency_count():
     assert edf("htotdev", 0, 16, N_NBS) == pytest.approx((M / 16) / (0.559 + 1.004 * 16 / M))
 
 
+@pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2, -3, -4])
+def test_htot_m1_edf_is_ohdev_edf(alpha):
+    # HTOT at m = 1 is OHVAR(τ0) (SP1065, Stable32), so is its EDF. Before: SP1065 Table 5's
+    # FFM form gave ν = 0.87 at any N (an interval from 0), and α = 2 raised.
+    assert edf("htotdev", alpha, 1, N_NBS) == edf("ohdev", alpha, 1, N_NBS)
+    assert edf_reason("htotdev", alpha, 1, N_NBS) == ""
+    nu = edf_array("htotdev", alpha, [1, 2], N_NBS, unsupported="nan")
+    assert nu[0] == edf("ohdev", alpha, 1, N_NBS)
+    if alpha in (1, 0, -1, -2):
+        assert nu[1] == edf_oadev_simple(alpha, 2, N_NBS)  # m > 1 unchanged
+    assert edf("htotdev", -1, 1, N_NBS) > 700
+
+
+def test_htot_m1_interval_is_ohdev_interval():
+    # The two Stable32 tables print the same value at m = 1 (2.9439e-01, Alpha 0) with
+    # different intervals; ours equals the OHDEV one.
+    htot = load_table("phasedat/phase_dat_htotdev_octave.txt")
+    ohdev = load_table("phasedat/phase_dat_ohdev_octave.txt")
+    assert htot.af[0] == ohdev.af[0] == 1 and htot.sigma[0] == ohdev.sigma[0]
+    assert htot.alpha[0] == ohdev.alpha[0] == 0
+    low, high = deviation_interval(htot.sigma[0], edf("htotdev", 0, 1, N_NBS), 0.683)
+    np.testing.assert_allclose([low, high], [ohdev.min_sigma[0], ohdev.max_sigma[0]], rtol=S32_RTOL)
+
+
 def test_theo1_second_factor_multiplies():
     # numerics.md §2.4/§8.5: MC at N = 513, WPM, m = 10 gives 382; the "divide" reading 506.
     assert edf("theo1", 2, 10, 513) == pytest.approx(382, abs=0.5)
@@ -193,6 +217,10 @@ S32_TOTAL = [
 #: ours is the wider (conservative) interval.
 KNOWN_DEVIATIONS = {
     ("gps/stable32_TOTDEV_octave.txt", 65536): 3.3e-3,
+    # HTOT at m = 1 is OHDEV and gets OHDEV's EDF (ν = 609 here); Stable32's HTOT table
+    # prints the SP1065 Table 5 interval (ν = 666) there, while its own OHDEV table prints
+    # Greenhall's 609 for the same value (test_htot_m1_interval_is_ohdev_interval).
+    ("phasedat/phase_dat_htotdev_octave.txt", 1): 1.55e-3,
     ("phasedat/phase_dat_htotdev_octave.txt", 128): 2.6e-3,
     ("phasedat/phase_dat_htotdev_octave.txt", 256): 1.4e-2,
 }
@@ -255,7 +283,7 @@ def test_stable32_total_wpm_rows_use_table5(path, n_points):
     assert np.allclose(high, t.max_sigma[rows], rtol=S32_RTOL)
     stat = "htotdev" if "htot" in path else "totdev"
     with pytest.raises(ParameterError, match="WPM"):
-        edf(stat, 2, int(t.af[rows][0]), n_points)
+        edf(stat, 2, int(t.af[rows & (t.af > 1)][0]), n_points)  # HTOT m = 1 is OHDEV
 
 
 MTOT_TABLES = [

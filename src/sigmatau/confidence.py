@@ -474,6 +474,17 @@ def _check_pair(statistic: str, alpha: int) -> None:
         )
 
 
+def _row_statistic(statistic: str, m: int) -> str:
+    """The estimator whose EDF applies at factor ``m``.
+
+    HTOT at m = 1 *is* OHVAR(τ0) (SP1065 and Stable32 report OHDEV there, and
+    so does :func:`sigmatau.htotdev`), so that row takes OHVAR's EDF; the HTOT
+    formula and the SP1065 Table 5 forms describe other estimators (Table 5's
+    FFM form at m = 1 gives ν ≈ 0.87 for any N, an interval from zero).
+    """
+    return "ohdev" if statistic == "htotdev" and m == 1 else statistic
+
+
 # ν depends only on its five arguments; the Greenhall sums cost milliseconds while a
 # statistic itself costs microseconds, and the same (statistic, α, m, N) recurs on
 # every call with the same record length.
@@ -557,8 +568,9 @@ def edf(statistic: str, alpha: int, m: int, N: int, *, version: Version = "full"
     mtotdev, ttotdev              ν = b·N/m − c             2 … −2
     htotdev, m ≥ 16               ν = (M/m)/(b0 + b1·m/M)   0 … −4
     htotdev, m ≥ 16               SP1065 Table 5 (FPM)      1
-    htotdev, m < 16               SP1065 Table 5            1 … −2
-    htotdev, m < 16               ν = (M/m)/(b0 + b1·m/M)   −3, −4
+    htotdev, 1 < m < 16           SP1065 Table 5            1 … −2
+    htotdev, 1 < m < 16           ν = (M/m)/(b0 + b1·m/M)   −3, −4
+    htotdev, m = 1                as ohdev (HTOT is OHVAR)  2 … −4
     theo1, theobr, theoh          Theo1 formulas            2 … −2
     stdev                         ν = ⌊(N−1)/m⌋ − 1         0
     ============================  ========================  ====================
@@ -591,8 +603,15 @@ def edf(statistic: str, alpha: int, m: int, N: int, *, version: Version = "full"
     form takes over for α = 1 … −2 (reproduces Stable32's HTOT intervals to
     7e-4; not checked by Monte Carlo). FPM uses Table 5 at every m (Stable32's
     own values are 4–12 % higher at m ≥ 128). WPM raises, as for TOTVAR. At
-    m = 1 Stable32 reports OHDEV as HTOT; use ``edf("ohdev", ...)`` for an
-    OHDEV value.
+    m = 1 HTOT is OHVAR(τ0) (SP1065, Stable32 and :func:`sigmatau.htotdev`
+    report OHDEV there) and ``edf("htotdev", α, 1, N)`` is
+    ``edf("ohdev", α, 1, N)``, for every α OHDEV has a rule for. (Stable32's
+    HTOT table prints the Table 5 interval at m = 1, ν = 666 for WFM at
+    N = 1001, while its OHDEV table prints Greenhall's ν = 609 for the same
+    value; Monte Carlo of OHVAR(τ0) on discrete white FM gives 493 ± 3 %
+    (2000 runs), and the N − 3 squared second differences of white y,
+    correlated at lags 1 and 2 by −4/6 and 1/6, give about
+    ``(N−3)/(1 + 2(16+1)/36) = 513``: both rules overstate ν there.)
 
     Theo1 (Howe & Tasset 2004), ``t = 0.75 m``, each first bracket
     **multiplied** by the second:
@@ -628,6 +647,7 @@ def edf(statistic: str, alpha: int, m: int, N: int, *, version: Version = "full"
     m = _check_int(m, "m", 1)
     N = _check_int(N, "N", 1)
     version = _check_version(version)
+    statistic = _row_statistic(statistic, m)
     _check_pair(statistic, alpha)
     return _edf_scalar(statistic, alpha, m, N, version)[0]
 
@@ -647,6 +667,7 @@ def edf_reason(statistic: str, alpha: int, m: int, N: int, *, version: Version =
     m = _check_int(m, "m", 1)
     N = _check_int(N, "N", 1)
     version = _check_version(version)
+    statistic = _row_statistic(statistic, m)
     _check_pair(statistic, alpha)
     return _edf_scalar(statistic, alpha, m, N, version)[1]
 
@@ -711,16 +732,17 @@ def edf_array(statistic: str, alpha: ArrayLike, ms: ArrayLike, N: int, *,
         raise ParameterError(f"ms must be a scalar or 1-D, got shape {m_arr.shape}")
     alphas = [_check_alpha(a) for a in a_arr.ravel()]
     factors = [_check_int(v, "m", 1) for v in m_arr.ravel()]
-    refused: dict[int, str] = {}
-    for a in sorted(set(alphas)):
+    rows = [(_row_statistic(statistic, v), a, v) for a, v in zip(alphas, factors)]
+    refused: dict[tuple[str, int], str] = {}
+    for key in sorted({(st, a) for st, a, _ in rows}):
         try:
-            _check_pair(statistic, a)
+            _check_pair(*key)
         except ParameterError as exc:
             if unsupported == "raise":
                 raise
-            refused[a] = str(exc)
-    pairs = [(math.nan, refused[a]) if a in refused else _edf_scalar(statistic, a, v, N, version)
-             for a, v in zip(alphas, factors)]
+            refused[key] = str(exc)
+    pairs = [(math.nan, refused[st, a]) if (st, a) in refused else _edf_scalar(st, a, v, N, version)
+             for st, a, v in rows]
     nu = np.array([p[0] for p in pairs], dtype=float).reshape(m_arr.shape)
     if return_reason:
         return nu, tuple(p[1] for p in pairs)
