@@ -32,12 +32,13 @@ def _run(argv, capsys):
     return code, out, err
 
 
-def _one_line_error(err: str, *patterns: str) -> None:
+def _one_line_error(err: str, *patterns: str) -> str:
     lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("sigmatau: warning:")]
     assert len(lines) == 1, err
     assert "Traceback" not in err
     for p in patterns:
         assert p in lines[0], (p, lines[0])
+    return lines[0]
 
 
 def _no_partial(folder: Path) -> None:
@@ -245,29 +246,34 @@ def test_output_directory_policy(imu_csv, tmp_path, capsys, monkeypatch):
     out.mkdir()
     (out / "keep.txt").write_text("mine")
     base = ["analyze", imu_csv, "--stat", "oadev", "--no-figures"]
-    code, _, err = _run([*base, "--out", out], capsys)
-    assert code == 2
-    _one_line_error(err, "exists", "--force")
-    # a directory that is not a sigmatau output is never replaced, even with --force
-    code, _, err = _run([*base, "--out", out, "--force"], capsys)
-    assert code == 2
-    _one_line_error(err, "holds no sigmatau results")
+    # a directory sigmatau did not write is refused with or without --force, and the message
+    # does not send the user to --force
+    for extra in ([], ["--force"]):
+        code, _, err = _run([*base, "--out", out, *extra], capsys)
+        assert code == 2
+        line = _one_line_error(err, "not a sigmatau output directory")
+        assert "--force" not in line
     assert (out / "keep.txt").read_text() == "mine"
-    # nor the current directory, its parents or the home directory
+    # nor the current directory, its parents (/ included) or the home directory: the first message
+    # says so, without sending the user to --force first
     monkeypatch.chdir(out)
-    for target in (".", "..", str(Path.home())):
-        code, _, err = _run([*base, "--out", target, "--force"], capsys)
-        assert code == 2, target
-        _one_line_error(err, "current directory")
+    for target in (".", "..", "/", str(Path.home())):
+        for extra in ([], ["--force"]):
+            code, _, err = _run([*base, "--out", target, *extra], capsys)
+            assert code == 2, target
+            line = _one_line_error(err, "current directory")
+            assert "--force" not in line
     assert (out / "keep.txt").read_text() == "mine"
     monkeypatch.chdir(tmp_path)
-    # a previous output is replaced with --force, as a whole
+    # a previous output: without --force the message offers it, and with it the run succeeds
     res = tmp_path / "res"
     assert _run([*base, "--out", res], capsys)[0] == 0
-    (res / "extra.txt").write_text("old")
+    code, _, err = _run([*base, "--out", res], capsys)
+    assert code == 2
+    _one_line_error(err, "exists", "--force")
     code, _, err = _run([*base, "--out", res, "--force"], capsys)
     assert code == 0, err
-    assert not (res / "extra.txt").exists() and (res / "results.json").exists()
+    assert (res / "results.json").exists()
     _no_partial(tmp_path)
 
 
@@ -580,7 +586,7 @@ def test_without_matplotlib_everything_but_the_figures_is_written(imu_csv, tmp_p
     assert code == 0, err
     assert "sigmatau[plot]" in err and "warning" in err
     names = {p.name for p in out.iterdir()}
-    assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} == names
+    assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html", "sigmatau-manifest.json"} == names
     html = (out / "report.html").read_text()
     assert "Figures not made" in html and "sigmatau[plot]" in html
 

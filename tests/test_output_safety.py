@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import os
 import signal
 import subprocess
@@ -185,3 +186,113 @@ def test_without_pyyaml_imu_yaml_is_skipped_with_one_warning(tmp_path, capsys, m
     warns = [ln for ln in err.splitlines() if ln.strip()]
     assert len(warns) == 1 and "imu.yaml not written" in warns[0] and "sigmatau[yaml]" in warns[0], err
     assert not (tmp_path / "o" / "imu.yaml").exists() and (tmp_path / "o" / "model.csv").exists()
+
+
+# ------------------------------------------------------------------ --force and leftovers
+
+
+def _digests(folder: Path) -> dict[str, str]:
+    import hashlib
+
+    return {str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def _leftovers(folder: Path) -> list[str]:
+    return [p.name for p in folder.iterdir() if ".partial-" in p.name or ".old-" in p.name]
+
+
+@pytest.fixture
+def one_channel(tmp_path) -> Path:
+    return _log(tmp_path / "one.csv", ["x"], np.random.default_rng(21), n=2000)
+
+
+def _analyze(src: Path, out: Path, *extra) -> list[str]:
+    return ["analyze", str(src), "--out", str(out), "--stat", "oadev", "--quiet", *map(str, extra)]
+
+
+def test_force_refuses_a_directory_sigmatau_did_not_write(tmp_path, capsys, one_channel):
+    proj = tmp_path / "proj"  # the reproducer
+    proj.mkdir()
+    (proj / "results.json").write_text("{}\n")
+    (proj / "thesis.tex").write_text("x\n")
+    before = _digests(proj)
+    code, _, err = _run(_analyze(one_channel, proj, "--force", "--no-figures"), capsys)
+    assert code == 2
+    _one_line_error(err, "not a sigmatau output directory")
+    assert _digests(proj) == before
+    # a forged manifest naming a file outside the directory is no manifest
+    (proj / "sigmatau-manifest.json").write_text(json.dumps({"format": "sigmatau output manifest 1",
+        "files": [{"name": "../one.csv", "size": 1, "sha256": "0" * 64}]}))
+    code, _, err = _run(_analyze(one_channel, proj, "--force", "--no-figures"), capsys)
+    assert code == 2 and one_channel.exists()
+    _one_line_error(err, "not a sigmatau output directory")
+    assert not _leftovers(tmp_path)
+
+
+def test_force_replaces_only_our_files(tmp_path, capsys, one_channel):
+    from sigmatau.outputs import read_manifest
+
+    res = tmp_path / "res"
+    code, _, err = _run(_analyze(one_channel, res, "--figures", "png"), capsys)
+    assert code == 0, err
+    first = {e["name"] for e in read_manifest(res)}
+    assert {"results.json", "statistics.csv", "report.html", "signal_x.png"} <= first
+    (res / "thesis.tex").write_text("my thesis\n")  # the user's files, added later
+    (res / "notes").mkdir()
+    (res / "notes" / "a.txt").write_text("notes\n")
+    code, _, err = _run(["analyze", one_channel, "--out", res, "--stat", "mdev", "--no-figures", "--quiet",
+                         "--force"], capsys)
+    assert code == 0, err
+    assert (res / "thesis.tex").read_text() == "my thesis\n" and (res / "notes" / "a.txt").read_text() == "notes\n"
+    assert not list(res.glob("*.png"))  # ours from the first run, not written by the second: removed
+    assert json.loads((res / "results.json").read_text())["settings"]["statistics"] == ["mdev"]
+    manifest = read_manifest(res)
+    names = {e["name"] for e in manifest}
+    assert names == {p.name for p in res.iterdir() if p.is_file()} - {"thesis.tex", "sigmatau-manifest.json"}
+    assert all(e["size"] == (res / e["name"]).stat().st_size for e in manifest)
+    assert not _leftovers(tmp_path)
+
+
+def test_force_refuses_changed_or_foreign_files_of_our_names(tmp_path, capsys, one_channel):
+    res = tmp_path / "res"
+    assert _run(_analyze(one_channel, res, "--no-figures", "--no-report"), capsys)[0] == 0
+    (res / "statistics.csv").write_text("my edits\n")
+    code, _, err = _run(_analyze(one_channel, res, "--no-figures", "--force"), capsys)
+    assert code == 2
+    _one_line_error(err, "statistics.csv", "changed since sigmatau wrote it")
+    assert (res / "statistics.csv").read_text() == "my edits\n"
+    (res / "statistics.csv").unlink()
+    (res / "report.html").write_text("<p>mine</p>\n")  # not written by the first run
+    code, _, err = _run(_analyze(one_channel, res, "--no-figures", "--force"), capsys)
+    assert code == 2
+    _one_line_error(err, "report.html", "not a file sigmatau wrote")
+    (res / "report.html").unlink()
+    (res / "signal_x.png").write_text("mine\n")  # a figure name: found once the figures are planned
+    before = _digests(res)
+    code, _, err = _run(_analyze(one_channel, res, "--figures", "png", "--force"), capsys)
+    assert code == 2
+    _one_line_error(err, "signal_x.png", "not a file sigmatau wrote")
+    assert _digests(res) == before
+    assert not _leftovers(tmp_path)
+
+
+def test_force_puts_the_previous_output_back_when_replacing_fails(tmp_path, capsys, one_channel, monkeypatch):
+    res = tmp_path / "res"
+    assert _run(_analyze(one_channel, res, "--figures", "png"), capsys)[0] == 0
+    (res / "thesis.tex").write_text("my thesis\n")
+    before = _digests(res)
+    real_replace = os.replace
+
+    def failing_replace(src, dst, *a, **k):
+        if Path(dst) == res / "statistics.csv" and ".partial-" in str(src):
+            raise OSError(28, "No space left on device", str(dst))
+        return real_replace(src, dst, *a, **k)
+
+    monkeypatch.setattr(os, "replace", failing_replace)
+    code, _, err = _run(_analyze(one_channel, res, "--no-figures", "--force"), capsys)
+    monkeypatch.undo()
+    assert code == 1
+    _one_line_error(err, "No space left on device")
+    assert _digests(res) == before  # every previous file back, byte for byte, the user's file untouched
+    assert not _leftovers(tmp_path)

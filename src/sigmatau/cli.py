@@ -223,27 +223,15 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
     return EXIT_OK
 
 
-def _check_out(args: argparse.Namespace, default: Path) -> Path:
-    """The output directory, checked before any long computation."""
-    from .outputs import FIGURE_FORMATS
+def _check_out(args: argparse.Namespace, default: Path, protect: Sequence[str] = ()) -> Path:
+    """The output directory and the output options, checked before any long computation."""
+    from .outputs import FIGURE_FORMATS, check_output_dir
 
     out = Path(args.out) if args.out else default
-    if out.exists() and not args.force:
-        raise _UsageError(f"output directory {str(out)!r} exists; use --force to replace it")
-    if out.exists() and not out.is_dir():
-        raise _UsageError(f"--out {str(out)!r} exists and is not a directory")
-    cwd = Path.cwd().resolve()
-    if out.resolve() == cwd or out.resolve() in cwd.parents or out.resolve() == Path.home().resolve():
-        raise _UsageError(f"--out {str(out)!r} is the current directory, one of its parents or the home directory;"
-                          " choose a directory of its own")
-    if out.is_dir() and any(out.iterdir()) and not (out / "results.json").is_file():
-        raise _UsageError(f"--out {str(out)!r} is not empty and holds no sigmatau results; --force replaces only a"
-                          " previous sigmatau output directory")
+    check_output_dir(out, force=args.force, protect=protect)
     for f in args.figures.split(","):
         if f.strip().lower() not in FIGURE_FORMATS:
             raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
-    if not (out.resolve().parent).is_dir():
-        raise _UsageError(f"--out {str(out)!r}: the parent directory does not exist")
     if not 0 < args.confidence < 1:
         raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
     if printable(args.rostopic) != args.rostopic:  # it goes into imu.yaml: one line, as ROS names are
@@ -259,7 +247,7 @@ def _cmd_analyze(args: argparse.Namespace, console: _Console) -> int:
     if args.list_topics:
         return _list_topics(args)
     default = Path(Path(args.log).name.split(".")[0] + "-sigmatau")
-    out = _check_out(args, default)
+    out = _check_out(args, default, protect=[args.log])
     log = _read(args, console)
     return _run_analysis(log, args, console, out)
 
