@@ -82,6 +82,64 @@ def ocxo_frequency() -> np.ndarray:
     return f / 1e7 - 1.0
 
 
+def ocxo_normalised() -> np.ndarray:
+    """OCXO frequency as the Stable32 octave runs (``ocxo/*_octave.txt``) read it: f/1e7 ≈ 1.
+
+    Their headers say "Average = 1.000000e+00" where the all-τ runs of y = f/1e7 − 1
+    say "Average = 1.881550e-13".
+    """
+    return _column(DATA / "ocxo" / "ocxo_frequency.txt") / 1e7
+
+
+def stable32_float_freq_dev(statistic: str, u: np.ndarray, ms, alpha=None) -> np.ndarray:
+    """Deviations of frequency data ``u`` (τ0 = 1) by the plain sums, in float64, in the
+    order a program that does not remove the mean frequency first would use.
+
+    This reproduces the round-off of Stable32's octave runs on f/1e7 = 1 + y: the
+    non-overlapped ADEV/HDEV from averages of ``u`` summed sequentially over each block,
+    every other statistic from the phase ``x = [0, cumsum(u)]`` (about 2·10⁴ s for the
+    OCXO, so each point carries a rounding error of up to ulp/2 ≈ 1.8e-12 s against
+    7.6e-11 s phase steps: an added white-PM-like noise). Applied to y itself it gives
+    the exact statistic. ``alpha`` (one per m) applies the TOTVAR bias 1 − aτ/T of
+    SP1065 (a = 0, 1/(3 ln 2), 0.75 for α = 0, −1, −2; T = M τ0), as Stable32 does.
+    A test oracle: plain loops over numpy slices, no sigmatau code.
+    """
+    u = np.asarray(u, dtype=np.float64)
+    x = np.concatenate(([0.0], np.cumsum(u)))
+    out = []
+    for k, m in enumerate(int(v) for v in np.atleast_1d(ms)):
+        if statistic in ("adev", "hdev"):
+            blocks = u[: (u.size // m) * m].reshape(-1, m)
+            avg = np.cumsum(blocks, axis=1)[:, -1] / m
+            d = np.diff(avg, 1 if statistic == "adev" else 2)
+            var = np.mean(d**2) / (2.0 if statistic == "adev" else 6.0)
+        elif statistic in ("oadev", "mdev", "tdev"):
+            d2 = x[2 * m:] - 2 * x[m:-m] + x[: -2 * m]
+            if statistic == "oadev":
+                var = np.mean(d2**2) / (2.0 * m * m)
+            else:
+                c = np.concatenate(([0.0], np.cumsum(d2)))
+                var = np.mean((c[m:] - c[:-m]) ** 2) / (2.0 * m**4)
+                if statistic == "tdev":
+                    var *= m * m / 3.0
+        elif statistic == "ohdev":
+            d3 = x[3 * m:] - 3 * x[2 * m: -m] + 3 * x[m: -2 * m] - x[: -3 * m]
+            var = np.mean(d3**2) / (6.0 * m * m)
+        elif statistic == "totdev":
+            n = x.size
+            ext = np.concatenate((2 * x[0] - x[n - 2:0:-1], x, 2 * x[-1] - x[-2:0:-1]))
+            i = np.arange(1, n - 1) + (n - 2)
+            d2 = ext[i - m] - 2 * ext[i] + ext[i + m]
+            var = np.sum(d2**2) / (2.0 * m * m * (n - 2))
+            a = {0: 0.0, -1: 1.0 / (3.0 * np.log(2.0)), -2: 0.75}
+            if alpha is not None:
+                var /= 1.0 - a.get(int(np.atleast_1d(alpha)[k]), 0.0) * m / u.size
+        else:
+            raise KeyError(statistic)
+        out.append(np.sqrt(var))
+    return np.array(out)
+
+
 def tic_phase() -> np.ndarray:
     """Keysight 53230A time-interval noise floor, phase in seconds (first 55688 points)."""
     return _column(DATA / "Keysight53230A_ti_noise_floor" / "tic_phase.txt")[:55688]
