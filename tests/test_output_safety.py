@@ -296,3 +296,55 @@ def test_force_puts_the_previous_output_back_when_replacing_fails(tmp_path, caps
     _one_line_error(err, "No space left on device")
     assert _digests(res) == before  # every previous file back, byte for byte, the user's file untouched
     assert not _leftovers(tmp_path)
+
+
+def _marked(folder: Path, host: str, pid: int) -> Path:
+    from sigmatau.outputs import PARTIAL_MARKER
+
+    folder.mkdir()
+    (folder / "results.json").write_text("{}\n")
+    (folder / PARTIAL_MARKER).write_text(json.dumps({"host": host, "pid": pid}) + "\n")
+    return folder
+
+
+def test_a_later_run_removes_only_stale_partials_of_ours(tmp_path, capsys, one_channel):
+    import socket
+
+    done = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead = int(done.stdout)  # a process that has exited
+    alive = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(60)"])
+    try:
+        here = socket.gethostname()
+        stale = [_marked(tmp_path / ".res.partial-dead1", here, dead),
+                 _marked(tmp_path / ".other.old-dead2", here, dead)]
+        kept = [_marked(tmp_path / ".res.partial-alive", here, alive.pid),
+                _marked(tmp_path / ".res.partial-remote", "another-host.example", dead),
+                tmp_path / ".res.partial-nomarker", tmp_path / "res.partial-notours"]
+        for d in kept[2:]:
+            d.mkdir()
+            (d / "x").write_text("user\n")
+        code, _, err = _run(_analyze(one_channel, tmp_path / "res", "--no-figures"), capsys)
+        assert code == 0, err
+        assert not any(d.exists() for d in stale)
+        assert all(d.exists() for d in kept)
+    finally:
+        alive.kill()
+        alive.wait()
+
+
+def test_sigterm_during_analyze_cleans_up_and_exits_143(tmp_path):
+    src = _log(tmp_path / "six.csv", [f"c{i}" for i in range(6)], np.random.default_rng(22), n=20000)
+    out = tmp_path / "o"
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    proc = subprocess.Popen([sys.executable, "-m", "sigmatau", "analyze", str(src), "--out", str(out), "--stat",
+                             "oadev", "--figures", "png,svg,pdf", "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    deadline = time.monotonic() + 120
+    while not list(tmp_path.glob(".o.partial-*")) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert proc.poll() is None, "finished before it could be interrupted: make the log longer"
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    _one_line_error(err, "terminated")
+    assert not out.exists() and not _leftovers(tmp_path)

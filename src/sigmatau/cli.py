@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 import tempfile
 import textwrap
+import threading
 import warnings
 from pathlib import Path
 from typing import Any, NoReturn, Optional, Sequence
@@ -24,7 +26,7 @@ from .outputs import printable
 
 __all__ = ["main"]
 
-EXIT_OK, EXIT_DATA, EXIT_USAGE, EXIT_INTERNAL, EXIT_INTERRUPTED = 0, 1, 2, 3, 130
+EXIT_OK, EXIT_DATA, EXIT_USAGE, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 3, 130, 143
 
 #: The demo's simulated IMU: LSM6DSL datasheet noise densities (as quoted in
 #: ST DT0064) with bias instability and random walk of a typical consumer MEMS
@@ -33,6 +35,14 @@ DEMO_IMU = {
     "gyro": {"preset": "lsm6dsl-gyro", "B": 2.4e-5, "K": 1.5e-6},    # B ≈ 5 °/h, K ≈ 18.6 °/h/√h
     "accel": {"preset": "lsm6dsl-accel", "B": 2.0e-4, "K": 2.0e-5},  # B ≈ 20 µg, K ≈ 2 µg/√s
 }
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread so that the same clean-up as for Ctrl-C runs."""
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    raise Terminated()
 
 
 class _UsageError(Exception):
@@ -708,6 +718,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     console = _Console(getattr(args, "quiet", False))
     old_show = warnings.showwarning
     warnings.showwarning = _showwarning
+    old_term = None
+    if threading.current_thread() is threading.main_thread():  # `kill` removes temporary files as Ctrl-C does
+        old_term = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return int(args.func(args, console))
     except _UsageError as exc:
@@ -732,6 +745,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         code, msg = EXIT_DATA, f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc)
         if debug:
             raise
+    except Terminated:
+        print("sigmatau: terminated (SIGTERM)", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         print("sigmatau: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
@@ -741,6 +757,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         code, msg = EXIT_INTERNAL, f"internal error: {type(exc).__name__}: {exc} (run with --debug for details)"
     finally:
         warnings.showwarning = old_show
+        if old_term is not None:
+            signal.signal(signal.SIGTERM, old_term)
     print(f"sigmatau: error: {msg.splitlines()[0] if msg else 'failed'}", file=sys.stderr)
     return code
 
