@@ -23,6 +23,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
+import refdata
 import sigmatau.total as total_mod
 from refdata import (
     PINK_RATE,
@@ -190,12 +191,8 @@ STABLE32 = [
     # Phase data; Alpha 2, 1, 0 (TOTVAR a = 0 or no factor).
     ("gps/stable32_TOTDEV_octave.txt", totdev, gps_phase, _PHASE, "alpha", 1e-4),
     ("Keysight53230A_ti_noise_floor/tic_totdev.txt", totdev, tic_phase, _PHASE, "alpha", 1e-4),
-    # S32 1.60 octave run on the OCXO: TOTVAR bias 1 - aτ/T applied for Alpha -1/-2
-    # (without it the rows at m = 512, 1024 are off by 1.0 % and 1.2 %). The data
-    # file behind this run was not identical to ours: the OADEV octave table of
-    # the same run differs from sigmatau.oadev by the same pattern, up to 1.2e-3
-    # (test_ocxo_octave_tables_share_a_data_offset), hence 2e-3 here.
-    ("ocxo/totdev_octave.txt", totdev, ocxo_frequency, {}, "alpha", 2e-3),
+    # ocxo/totdev_octave.txt (S32 1.60 octave run on f/1e7, not on y): see
+    # test_stable32_ocxo_totdev_octave_* below.
 ]
 
 _CACHE: dict = {}
@@ -230,11 +227,45 @@ def test_stable32_ocxo_octave_needs_totvar_bias():
     assert np.all(np.abs(raw.dev[big] / table.sigma[big] - 1) > 5e-3)
 
 
-def test_ocxo_octave_tables_share_a_data_offset():
-    """The OCXO octave run used data that differ slightly from ours (see above)."""
+# TOTDEV at small m: the OCXO octave table is 4.9e-4, 4.4e-4, 3.8e-4 above the exact
+# TOTDEV at m = 1, 2, 4 (up to 1.6e-3 at larger m). Not ends, normalisation or mean
+# frequency: Stable32 ran this table on f/1e7 = 1 + y (header "Average = 1.000000e+00")
+# and integrated it to a ~2e4 s phase in float64, whose rounding (~1e-12 s a point)
+# adds white-PM-like noise to 7.6e-11 s steps. The doubly reflected SP1065 sum on that
+# phase, with the TOTVAR bias for the Alpha column, gives every printed value; the same
+# sum on y is sigmatau's value, which matches the all-τ table of y (above) and SP1065's
+# NBS values (test_nbs1000_totdev).
+
+
+def test_stable32_ocxo_totdev_octave_reproduced_on_f_over_1e7():
+    table = load_table("ocxo/totdev_octave.txt")
+    as_seen = refdata.stable32_float_freq_dev("totdev", refdata.ocxo_normalised(), table.af, table.alpha)
+    np.testing.assert_allclose(as_seen, table.sigma, rtol=1e-4, atol=0)  # measured 9.0e-6
+    exact = refdata.stable32_float_freq_dev("totdev", ocxo_frequency(), table.af, table.alpha)
+    small = table.af <= 4
+    assert np.all((table.sigma[small] / exact[small] - 1) > 3e-4)  # the reported symptom
+
+
+def test_stable32_ocxo_totdev_octave_within_its_roundoff():
+    table = load_table("ocxo/totdev_octave.txt")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RangeWarning)
+        dev, n = _s32_devs(totdev, table, _data(ocxo_frequency))
+    np.testing.assert_array_equal(n, table.n)
+    exact = refdata.stable32_float_freq_dev("totdev", ocxo_frequency(), table.af, table.alpha)
+    as_seen = refdata.stable32_float_freq_dev("totdev", refdata.ocxo_normalised(), table.af, table.alpha)
+    np.testing.assert_allclose(dev, exact, rtol=1e-9, atol=0)
+    artefact = np.abs(as_seen / exact - 1)
+    assert np.all(np.abs(dev / table.sigma - 1) <= artefact + 1e-4)
+
+
+def test_ocxo_octave_oadev_is_roundoff_of_one_plus_y():
+    """The OADEV octave table of the same run shows the same artefact."""
     table = load_table("ocxo/oadev_octave.txt")
     err = oadev(ocxo_frequency(), m=table.af).dev / table.sigma - 1
     assert 4e-4 < np.abs(err).max() < 2e-3
+    as_seen = refdata.stable32_float_freq_dev("oadev", refdata.ocxo_normalised(), table.af)
+    np.testing.assert_allclose(as_seen, table.sigma, rtol=1e-4, atol=0)
 
 
 def test_stable32_mtot_all_tau_alpha1_rows_use_083():
