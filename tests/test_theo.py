@@ -11,9 +11,15 @@ Sources (numerics.md, tests/data/allantools/README.md):
   significant digits, so the deviation is held to a relative 1e-4 and the
   "Thêo1 #" column, (N−m)·m/2 printed with five digits, must be our count
   rounded to those digits.
-* Not used: phasedat/phase_dat_theo1.txt. It is a run with "Alpha = 1" forced,
-  and every value equals raw Theo1 × 0.7764 (variance × 0.6028), a factor whose
-  origin is unexplained (numerics.md §3, §8 item 13). No factor is fitted to it.
+* phasedat/phase_dat_theo1.txt (header "Alpha = 1"): every value is raw Theo1
+  × 0.7764 (variance × 0.602787, constant in m to the printed digits), which
+  numerics.md §3/§8 item 13 left unexplained. It is not the published FPM
+  bias (Howe & Tasset's ratio falls from 0.588 at m = 10 to 0.253 at m = 998):
+  it is TheoBR's κ averaged over Stable32's "Run" span n = ⌊N/6⌋ − 3 = 163
+  (κ = 0.6027870), and Alpha = 1 is the noise type of that κ. Held to 1e-4
+  through ``theobr(kappa="run")``; nothing is fitted.
+* Theo1 bias table (Howe & Tasset 2004 Table 1 as numerics.md §3 gives it):
+  (a, b, c) typed from the table, the ratio a + b/t^c evaluated here.
 
 The fast Theo1 sums (lag sums over segments, and the incremental pass used for
 many factors) are held to the plain double sum of numerics.md §1.12, written
@@ -264,6 +270,108 @@ def test_stable32_theo1(table):
     np.testing.assert_allclose(r.dev, t.sigma, rtol=STABLE32_RTOL)
     np.testing.assert_allclose(r.taus, t.tau, rtol=1e-12)
     assert np.all(_rounds_to(r.n, t.n)), r.n[~_rounds_to(r.n, t.n)]
+
+
+def test_stable32_theo1_alpha0_is_published_wfm_bias():
+    # Stable32 with Alpha forced to 0: the published WFM ratio is 1, so raw = corrected.
+    t = refdata.load_table("phasedat/phase_dat_theo1_alpha0.txt")
+    r = theo.theo1(refdata.phase_dat(), data_type="phase", m=t.af, bias="published", alpha=0)
+    np.testing.assert_allclose(r.dev, t.sigma, rtol=STABLE32_RTOL)
+    np.testing.assert_array_equal(r.bias_factor, 1.0)
+    assert r.bias == "published alpha=0"
+
+
+def test_stable32_theo1_auto_table_is_theobr_with_run_kappa():
+    t = refdata.load_table("phasedat/phase_dat_theo1.txt")
+    x = refdata.phase_dat()
+    r = theo.theobr(x, data_type="phase", m=t.af, kappa="run")
+    np.testing.assert_allclose(r.dev, t.sigma, rtol=STABLE32_RTOL)  # measured 4.0e-5
+    assert np.all(_rounds_to(r.n, t.n))
+    k = theo.theobr_kappa(x, data_type="phase", method="run")
+    assert k.n == 1001 // 6 - 3 == 163 and round(k.kappa, 6) == 0.602787
+    assert r.bias == "theobr kappa=0.602787 (n=163, run span N/6)"
+    # The constant ratio is not the published FPM bias, which varies with m.
+    raw = theo.theo1(x, data_type="phase", m=t.af, ci=None)
+    ratio = (t.sigma / raw.dev) ** 2
+    assert ratio.std() < 5e-5
+    fpm = theo.theo1(x, data_type="phase", m=t.af, bias="published", alpha=1, ci=None)
+    assert abs(fpm.dev[0] / t.sigma[0] - 1) > 1e-2
+    assert np.ptp(fpm.var / raw.var) > 0.3
+
+
+# (alpha, m) -> AVAR/Theo1 = a + b/(0.75 m)^c, Howe & Tasset 2004 Table 1.
+THEO1_TABLE = {2: (0.09, 0.74, 0.40), 1: (0.14, 0.82, 0.30), 0: (1.0, 0.0, 0.0),
+               -1: (1.87, -1.05, 0.79), -2: (2.70, -1.53, 0.85)}
+
+
+@pytest.mark.parametrize("alpha", sorted(THEO1_TABLE))
+def test_theo1_published_bias(alpha):
+    y = nbs1000()
+    ms = np.array([10, 100, 500])
+    raw = theo.theo1(y, m=ms, alpha=alpha)
+    r = theo.theo1(y, m=ms, alpha=alpha, bias="published")
+    a, b, c = THEO1_TABLE[alpha]
+    expected = np.array([a + b / (0.75 * m) ** c for m in ms])
+    np.testing.assert_allclose(r.var / raw.var, expected, rtol=1e-12)
+    np.testing.assert_allclose(r.bias_factor, 1.0 / expected, rtol=1e-12)
+    np.testing.assert_allclose(r.ci_low / r.dev, raw.ci_low / raw.dev, rtol=1e-12)
+    np.testing.assert_allclose(r.ci_high / r.dev, raw.ci_high / raw.dev, rtol=1e-12)
+    assert r.bias == f"published alpha={alpha}" and raw.bias == "none" and raw.bias_factor is None
+    np.testing.assert_array_equal(r.n, raw.n)
+    bare = theo.theo1(y, m=ms, alpha=alpha, bias="published", ci=None)
+    np.testing.assert_array_equal(bare.var, r.var)
+    assert bare.ci_low is None and bare.edf is None
+
+
+def test_theo1_auto_bias_uses_identified_alpha():
+    y = nbs1000()
+    ms = [10, 100]
+    auto = theo.theo1(y, m=ms, bias="auto")
+    assert auto.bias == "published at the alpha identified per tau"
+    for k, a in enumerate(auto.alpha):
+        forced = theo.theo1(y, m=ms[k], bias="published", alpha=int(a))
+        assert auto.var[k] == pytest.approx(forced.var[0], rel=1e-12)
+
+
+@pytest.mark.parametrize("kw, match", [
+    (dict(bias="kappa"), "bias='kappa' must be one of"),
+    (dict(bias=None), "bias=None must be one of"),
+    (dict(bias="published", alpha=-3), "no published bias factor for alpha=-3"),
+    (dict(bias="auto", alpha=-4), "no published bias factor for alpha=-4"),
+])
+def test_theo1_bias_errors(kw, match):
+    with pytest.raises(ParameterError, match=match):
+        theo.theo1(nbs1000(), m=10, **kw)
+
+
+def test_theobr_kappa_run_span_is_capped():
+    # n = ⌊N/6⌋ − 3 would need OAVAR at m = N/2 (no term) when 6 divides N.
+    rng = np.random.default_rng(11)
+    for n_phase in (90, 1002, 1003):
+        k = theo.theobr_kappa(rng.standard_normal(n_phase), data_type="phase", method="run")
+        assert n_phase - 2 * (9 + 3 * k.n) >= 1
+        assert k.n == min(n_phase // 6 - 3, ((n_phase - 1) // 2 - 9) // 3)
+    with pytest.raises(ParameterError, match="kappa='wide'"):
+        theo.theobr(nbs1000(), kappa="wide")
+
+
+@pytest.mark.parametrize("alpha", [2, 1])
+def test_theo1_published_bias_monte_carlo(alpha):
+    # Corrected Theo1 at m = 4j estimates AVAR at τ = 3j (numerics.md §3 checked the table
+    # the same way). 150 seeded records of 513 phase points: the mean ratio of OAVAR to
+    # corrected Theo1 has a standard error under 1 % (ν ≈ 250-400 per record), bound 4 %.
+    from sigmatau.generate import power_law_noise
+
+    rng = np.random.default_rng(20261124)
+    ms = np.array([12, 40, 100])
+    ratios = []
+    for _ in range(150):
+        x = power_law_noise(513, alpha, data_type="phase", rng=rng)
+        th = theo.theo1(x, data_type="phase", m=ms, alpha=alpha, bias="published", ci=None).var
+        av = oadev(x, data_type="phase", m=(3 * ms) // 4, ci=None).var
+        ratios.append(av / th)
+    mean = np.mean(ratios, axis=0)
+    assert np.all(np.abs(mean - 1) < 0.04), mean
 
 
 # --- properties -----------------------------------------------------------------------------

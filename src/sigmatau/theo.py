@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal, Optional
 
 import numpy as np
@@ -518,9 +518,10 @@ class TheoBRKappa:
     block: int = 1
 
 
-#: κ methods: the published definition on the whole record, or on a block-averaged copy.
-KappaMethod = Literal["fast", "exact"]
-_KAPPA_METHODS = ("fast", "exact")
+#: κ methods: the published definition on the whole record, or on a block-averaged copy,
+#: or over Stable32's wider "Run" span of ratios.
+KappaMethod = Literal["fast", "exact", "run"]
+_KAPPA_METHODS = ("fast", "exact", "run")
 #: Largest record (phase points) on which the fast κ still uses the published definition.
 KAPPA_FAST_POINTS = 16384
 
@@ -545,6 +546,8 @@ def _kappa(x: np.ndarray, method: str = "fast") -> TheoBRKappa:
     """κ of the phase record ``x`` (linear trend removed) by ``method``."""
     N = x.size
     _check_kappa_points(N)
+    if method == "run":
+        return _kappa_exact(x, n=_run_span(N))
     block = 1 if method == "exact" else -(-N // KAPPA_FAST_POINTS)
     if block == 1:
         return _kappa_exact(x)
@@ -564,11 +567,18 @@ def _kappa(x: np.ndarray, method: str = "fast") -> TheoBRKappa:
     return TheoBRKappa(kappa=kap.kappa, n=kap.n, n_points=int(N), block=int(block))
 
 
-def _kappa_exact(x: np.ndarray) -> TheoBRKappa:
-    """κ by its published definition (numerics.md §1.13) on the phase record ``x``."""
+def _run_span(N: int) -> int:
+    """Upper index n of κ's average in Stable32's Run/Plot functions: ⌊N/6⌋ − 3, capped so
+    that OAVAR at m = 9+3n keeps at least one term (N − 2m ≥ 1)."""
+    return min(N // 6 - 3, ((N - 1) // 2 - 9) // 3)
+
+
+def _kappa_exact(x: np.ndarray, n: Optional[int] = None) -> TheoBRKappa:
+    """κ by its published definition (numerics.md §1.13) on the phase record ``x``;
+    ``n`` (default ⌊N/30⌋ − 3) is the upper index of the average."""
     N = x.size
     _check_kappa_points(N)
-    n = N // 30 - 3
+    n = N // 30 - 3 if n is None else n
     i = np.arange(n + 1)
     oavar, _ = _oavar_kernel(x, 9 + 3 * i, 1.0)
     theo, _ = _theo1_kernel(x, 12 + 4 * i, 1.0)
@@ -585,9 +595,60 @@ def _kappa_exact(x: np.ndarray) -> TheoBRKappa:
 
 
 def _kappa_text(k: TheoBRKappa) -> str:
+    if k.block == 1 and k.n > k.n_points // 30 - 3:
+        return f"theobr kappa={k.kappa:.6f} (n={k.n}, run span N/6)"
     if k.block == 1:
         return f"theobr kappa={k.kappa:.6f} (n={k.n})"
     return f"theobr kappa={k.kappa:.6f} (n={k.n}, fast: blocks of {k.block} points)"
+
+
+# --- Theo1 bias by noise type --------------------------------------------------------
+
+#: ``AVAR/Theo1 = a + b/t^c`` at ``t = 0.75·m`` (τ/τ0), by noise exponent α: Howe & Tasset
+#: 2004, Table 1 (as SP1065 and the Stable32 manual give it); numerics.md §3, checked there by
+#: Monte Carlo at N = 513 (WPM/FPM within 2 %, WFM 1 %, FFM/RWFM ~7 %).
+_THEO1_BIAS = {2: (0.09, 0.74, 0.40), 1: (0.14, 0.82, 0.30), 0: (1.0, 0.0, 0.0),
+               -1: (1.87, -1.05, 0.79), -2: (2.70, -1.53, 0.85)}
+
+TheoBias = Literal["none", "published", "auto"]
+_THEO_BIAS_MODES = ("none", "published", "auto")
+
+
+def _check_theo1_bias(bias: object, alpha: Optional[int]) -> str:
+    """Validate ``bias`` and a forced ``alpha`` against the table before computing."""
+    if not isinstance(bias, str) or bias not in _THEO_BIAS_MODES:
+        raise ParameterError(f"bias={bias!r} must be one of {_THEO_BIAS_MODES}")
+    if bias != "none" and alpha is not None and alpha not in _THEO1_BIAS:
+        raise ParameterError(
+            f"theo1: no published bias factor for alpha={alpha}; allowed: 2, 1, 0, -1, -2"
+        )
+    return bias
+
+
+def _theo1_avar_ratio(alphas: np.ndarray, ms: np.ndarray) -> np.ndarray:
+    """``a + b/(0.75 m)^c`` per row; NaN where the row's α has no entry."""
+    out = np.full(ms.size, np.nan)
+    for k, (a_k, m_k) in enumerate(zip(alphas, ms)):
+        if np.isfinite(a_k) and int(a_k) in _THEO1_BIAS:
+            a, b, c = _THEO1_BIAS[int(a_k)]
+            out[k] = a + b / (0.75 * float(m_k)) ** c
+    return out
+
+
+def _apply_theo1_bias(res: StabilityResult, bias: str, forced: Optional[int]) -> StabilityResult:
+    """Multiply each row's variance by AVAR/Theo1 for its noise type (``res.alpha``)."""
+    alphas = res.alpha if res.alpha is not None else np.full(res.m.size, np.nan)
+    ratio = _theo1_avar_ratio(np.asarray(alphas, dtype=float), res.m)
+    missing = ~np.isfinite(ratio)
+    # bias_factor is the divisor applied to raw Theo1 (Theo1/AVAR), as for TheoBR (1/κ).
+    factor = np.where(missing, 1.0, 1.0 / np.where(missing, 1.0, ratio))
+    var = res.var / factor
+    # A fixed divisor scales a χ² interval exactly as it scales the estimate.
+    scaled = {f: getattr(res, f) / np.sqrt(factor) for f in ("ci_low", "ci_high") if getattr(res, f) is not None}
+    desc = f"published alpha={forced}" if forced is not None else "published at the alpha identified per tau"
+    if missing.any():
+        desc += f" (uncorrected at {int(missing.sum())} tau whose alpha has no factor)"
+    return replace(res, var=var, dev=np.sqrt(var), bias=desc, bias_factor=factor, **scaled)
 
 
 # --- public functions ---------------------------------------------------------------
@@ -597,9 +658,9 @@ def _kappa_text(k: TheoBRKappa) -> str:
 def theo1(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
     points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
-    ci: Optional[CiMethod] = "chi2",
+    ci: Optional[CiMethod] = "chi2", bias: TheoBias = "none",
 ) -> StabilityResult:
-    """Theo1 deviation (raw, without bias removal).
+    """Theo1 deviation, raw (default) or corrected for the bias of a noise type.
 
     {common}
     Notes
@@ -622,6 +683,25 @@ def theo1(
     Stable32 starts there, but the estimator is defined from m = 2; drop the
     first rows if you need the Stable32 range.
 
+    **Bias** (``bias``, default ``"none"``: the raw estimator). Theo1 equals
+    AVAR at the same τ only for white FM; Howe & Tasset (2004, Table 1, as in
+    SP1065) give
+
+    .. math:: \\frac{\\mathrm{AVAR}(τ)}{\\mathrm{Theo1}(τ)} = a + \\frac{b}{t^c},
+              \\qquad t = 0.75\\,m ,
+
+    with (a, b, c) = WPM (0.09, 0.74, 0.40), FPM (0.14, 0.82, 0.30),
+    WFM (1, 0, 0), FFM (1.87, −1.05, 0.79), RWFM (2.70, −1.53, 0.85).
+    ``bias="published"`` multiplies the variance (and the interval) by this
+    ratio for ``alpha`` when given, else for the noise type identified at
+    each τ; ``"auto"`` is the same at the identified type (``alpha`` still
+    forces one). Rows whose α has no entry (−3, −4) stay raw and
+    ``result.bias`` counts them; ``result.bias_factor`` is the divisor applied
+    to raw Theo1, ``1/(a + b/t^c)``, as ``1/κ`` for :func:`theobr`.
+    Stable32's Theo1 output with Alpha forced to 0 is the raw value (the
+    WFM factor is 1); its "Auto/BR" output is not this table but TheoBR with
+    κ over a wider range (:func:`theobr` with ``kappa="run"``).
+
     Cost: O(N log² m) per τ by lag sums (FFT correlations over overlapping
     segments plus exact end corrections; about 0.5 s for the octave grid at
     N = 10^5), with the plain O(N·m) double sum used when it is cheaper or
@@ -642,8 +722,18 @@ def theo1(
     >>> r.taus.tolist(), [round(float(d), 7) for d in r.dev]
     ([7.5, 75.0], [0.107574, 0.0317893])
     """
-    return run(THEO1, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
-               alpha=alpha, confidence=confidence, ci=ci)
+    alpha_i, _, _ = check_options(alpha, confidence, ci)
+    bias = _check_theo1_bias(bias, alpha_i)
+    if bias == "none":
+        return run(THEO1, data, rate=rate, data_type=data_type, taus=taus, m=m,
+                   points_per_decade=points_per_decade, alpha=alpha, confidence=confidence, ci=ci)
+    # The correction needs each row's noise type even when no interval is wanted.
+    res = run(THEO1, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+              alpha=alpha, confidence=confidence, ci="chi2" if ci is None else ci)
+    res = _apply_theo1_bias(res, bias, alpha_i)
+    if ci is None:
+        res = replace(res, edf=None, ci_low=None, ci_high=None, confidence=None, ci_reason=None)
+    return res
 
 
 def theobr_kappa(
@@ -659,11 +749,18 @@ def theobr_kappa(
         Sample rate in Hz.
     data_type : {"freq", "phase"}
         Meaning of ``data``.
-    method : {"fast", "exact"}
+    method : {"fast", "exact", "run"}
         ``"exact"``: the published definition below on the whole record,
         O(N²) (minutes at N = 10^6). ``"fast"`` (default): the same definition
         on the record averaged in blocks (Fast TheoBR, see Notes); identical to
         ``"exact"`` up to 16384 phase points (``KAPPA_FAST_POINTS``).
+        ``"run"``: the same ratios averaged over Stable32's "Run"/"Plot" span,
+        ``n = ⌊N/6⌋ − 3`` (capped so that OAVAR at m = 9+3n has a term), on
+        the whole record — five times as many ratios, reaching τ ≈ T/2, and
+        O(N²). Stable32's Theo1 "Auto/BR" tables are Theo1 times this κ: the
+        PHASE.DAT table headed "Alpha = 1" is raw Theo1 × 0.602787 at every
+        τ, which is this κ (0.6027870, n = 163) to 1e-6, and its Alpha column
+        is the noise type of that κ (nominal ratio 0.6: FPM).
 
     Returns
     -------
@@ -746,11 +843,13 @@ def theobr(
     :func:`theobr_kappa` returns it directly. τ, m, n and the grids are those of
     :func:`theo1`.
 
-    ``kappa`` (``"fast"`` or ``"exact"``) chooses how κ is computed: above
+    ``kappa`` (``"fast"``, ``"exact"`` or ``"run"``) chooses how κ is computed: above
     16384 phase points ``"fast"`` (the default) applies the definition to the
     block-averaged record (Fast TheoBR) and ``result.bias`` says so
     (``"… (n=…, fast: blocks of b points)"``); ``"exact"`` applies it to the
-    whole record at O(N²) cost. See :func:`theobr_kappa` for the difference.
+    whole record at O(N²) cost; ``"run"`` averages the ratios over Stable32's
+    wider "Run" span n = ⌊N/6⌋ − 3 (reproduces its Theo1 "Auto/BR" tables).
+    See :func:`theobr_kappa` for the differences.
 
     References
     ----------
