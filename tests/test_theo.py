@@ -297,6 +297,8 @@ def test_stable32_theo1_auto_table_is_theobr_with_run_kappa():
     fpm = theo.theo1(x, data_type="phase", m=t.af, bias="published", alpha=1, ci=None)
     assert abs(fpm.dev[0] / t.sigma[0] - 1) > 1e-2
     assert np.ptp(fpm.var / raw.var) > 0.3
+    # Stable32's Alpha column is the type of that one κ on every row (fixed nominal ratios).
+    assert np.array_equal(r.alpha, t.alpha)
 
 
 # (alpha, m) -> AVAR/Theo1 = a + b/(0.75 m)^c, Howe & Tasset 2004 Table 1.

@@ -887,11 +887,16 @@ def theobr(
 
 
 def _kappa_noise(kap: TheoBRKappa, ms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Noise type of the TheoBR rows from κ (numerics.md §5.5): κ is compared with the
-    nominal AVAR/Theo1 ratio a + b/t^c of each noise type at each row's t = 0.75·m."""
+    """Noise type of the TheoBR rows from κ (numerics.md §5.5): κ is compared with the fixed
+    nominal AVAR/Theo1 ratios 0.4/0.6/1/1.71/2.24, as Stable32 does.
+
+    κ is one average over a span of factors, not a property of each row, so every TheoBR row
+    gets the same type; comparing it with the m-dependent ratio at each row's m gave a different
+    type per row from the same number (46 of 181 rows of Stable32's PHASE.DAT TheoBR table
+    agreed; the fixed ratios give 181 of 181)."""
     if ms.size == 0:
         return np.empty(0), np.empty(0)
-    a = np.asarray(theo_noise_id(np.full(ms.size, kap.kappa), m=ms), dtype=float)
+    a = np.asarray(theo_noise_id(np.full(ms.size, kap.kappa)), dtype=float)
     return a, np.full(ms.size, np.nan)
 
 
