@@ -348,3 +348,51 @@ def test_sigterm_during_analyze_cleans_up_and_exits_143(tmp_path):
     assert proc.returncode == 143, err
     _one_line_error(err, "terminated")
     assert not out.exists() and not _leftovers(tmp_path)
+
+
+# ------------------------------------------------------------------------ terminal
+
+ESCAPES = ["x\x1b[31mred", "\x1b]0;title\x07", "y\x9b2J", "bidi\u202eevil"]
+
+
+def _assert_inert(text: str, keep: str = "\n") -> None:
+    """No character that drives a terminal: C0 but ``keep``, DEL, C1, bidirectional overrides."""
+    bad = [hex(ord(c)) for c in text if (ord(c) < 0x20 and c not in keep) or 0x7f <= ord(c) <= 0x9f
+           or 0x202a <= ord(c) <= 0x202e or 0x2066 <= ord(c) <= 0x2069]
+    assert not bad, (bad, text[:2000])
+
+
+def test_terminal_output_escapes_control_characters(tmp_path, capsys):
+    src = _log(tmp_path / "l\x1b[2J.csv", ESCAPES, np.random.default_rng(23))
+    cols = ",".join(str(i) for i in range(1, len(ESCAPES) + 1))
+    runs = [
+        ["analyze", src, "--out", tmp_path / "o", "--no-figures", "--stat", "oadev", "--columns", cols],
+        ["stats", src, "--stat", "oadev", "--columns", cols],
+        ["stats", src, "--stat", "oadev", "--columns", "nope\x1b[2J"],  # error naming the columns
+        ["analyze", tmp_path / "missing\x1b[2J\n.csv", "--out", tmp_path / "o2"],  # error naming the file
+        ["stats", src, "--stat", "oadev", "--bogus\x1b[2J"],  # argparse's message
+    ]
+    for argv in runs:
+        code, out, err = _run(argv, capsys)
+        _assert_inert(out)
+        _assert_inert(err)
+        if code != 0:
+            line = _one_line_error(err)
+            assert "\\x1b" in line, line  # shown escaped, not dropped
+        else:
+            assert "\\x1b[31mred" in out and "\\x1b]0;title\\x07" in out and "\\u202e" in out
+
+
+def test_list_topics_escapes_control_characters(tmp_path, capsys):
+    pytest.importorskip("rosbags")
+    from test_io_ros import IMU, _imu, _store, write_bag
+
+    ts = _store(False)
+    topic = "/imu\x1b]0;pwned\x07\x1b[2J"
+    msgs = [(10**9 + i * 10**7, _imu(ts, False, i, 10**9 + i * 10**7, [0.0, 0.0, 0.0], [0.0, 0.0, 9.8]))
+            for i in range(10)]
+    bag = write_bag(tmp_path / "bag", "mcap", {topic: msgs}, {topic: IMU})
+    code, out, err = _run(["analyze", bag, "--list-topics"], capsys)
+    assert code == 0, err
+    _assert_inert(out, keep="\n\t")  # the tabs between the fields are ours
+    assert "/imu\\x1b]0;pwned\\x07\\x1b[2J\tsensor_msgs/msg/Imu\t10 messages" in out

@@ -69,12 +69,27 @@ class _Console:
 
     def progress(self, text: str) -> None:
         if not self.quiet and self.tty:
-            print(f"  {text}", file=sys.stderr, flush=True)
+            _say(f"  {text}", err=True, flush=True)
+
+
+def _say(text: str, *, err: bool = False, multiline: bool = False, flush: bool = False) -> None:
+    """Print one message (stdout, or stderr with ``err``) with its control characters escaped.
+
+    Every line the command prints goes through here: names and messages come from the user's
+    files, and an escape sequence in them must not drive the terminal (:func:`printable`).
+    ``multiline`` keeps the newlines of our own multi-line text (summary, tables).
+    """
+    print(printable(text, multiline=multiline), file=sys.stderr if err else sys.stdout, flush=flush)
+
+
+def _say_row(fields: Sequence[Any]) -> None:
+    """One tab-separated line on stdout, each field escaped as by :func:`_say` (the tabs are ours)."""
+    print("\t".join(printable(f) for f in fields))
 
 
 def _showwarning(message: Any, category: type, filename: str, lineno: int, file: Any = None,
                  line: Optional[str] = None) -> None:
-    print(f"sigmatau: warning: {message}", file=sys.stderr)
+    _say(f"sigmatau: warning: {message}", err=True)
 
 
 # ---------------------------------------------------------------------- options
@@ -168,7 +183,7 @@ def _list_topics(args: argparse.Namespace) -> int:
 
     topics = io.list_topics(args.log)
     for t in topics:
-        print(f"{t.topic}\t{t.msgtype}\t{t.count} messages")
+        _say_row([t.topic, t.msgtype, f"{t.count} messages"])
     return EXIT_OK
 
 
@@ -227,9 +242,9 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
     protect = [] if log.source.format == "memory" else [log.source.path]
     files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
                           report=not args.no_report, protect=protect)
-    print(analysis.summary())
-    print()
-    print(f"wrote {len(files)} files to {out}/: {', '.join(f.name for f in files)}")
+    _say(analysis.summary(), multiline=True)
+    _say("")
+    _say(f"wrote {len(files)} files to {out}/: {', '.join(f.name for f in files)}")
     return EXIT_OK
 
 
@@ -294,8 +309,8 @@ def _cmd_demo(args: argparse.Namespace, console: _Console) -> int:
         raise _UsageError("--duration and --rate must be positive")
     out = _check_out(args, Path("sigmatau-demo"))
     n = int(round(args.duration * args.rate))
-    print(f"demo: simulating a 6-axis LSM6DSL-like IMU, {args.duration / 3600:.3g} h at {args.rate:g} Hz"
-          f" ({n:,} samples per axis, seed {args.seed})", file=sys.stderr)
+    _say(f"demo: simulating a 6-axis LSM6DSL-like IMU, {args.duration / 3600:.3g} h at {args.rate:g} Hz"
+          f" ({n:,} samples per axis, seed {args.seed})", err=True)
     channels = _simulated_imu(args.duration, args.rate, args.seed)
     units = {k: ("rad/s" if k.startswith("gyro") else "m/s^2") for k in channels}
     log = log_from_arrays(channels, rate=args.rate, units=units,
@@ -328,7 +343,7 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
     _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
                                   f" data, {a.settings['confidence']:.2%} intervals")
     for w in a.warnings:
-        print(f"sigmatau: warning: {w}", file=sys.stderr)
+        _say(f"sigmatau: warning: {w}", err=True)
     return EXIT_OK
 
 
@@ -367,19 +382,20 @@ def _emit_stats(args: argparse.Namespace, channels: Sequence[Any], header: str) 
     if args.csv:
         text = statistics_csv(argparse.Namespace(channels=list(channels)))
         if args.csv == "-":
-            sys.stdout.write(text)
+            sys.stdout.write(printable(text, multiline=True) if sys.stdout.isatty() else text)
         else:
             _atomic_write(Path(args.csv), text.encode())
-            print(f"wrote {args.csv}", file=sys.stderr)
+            _say(f"wrote {args.csv}", err=True)
         return
-    print(header)
+    _say(header)
     for ch in channels:
         for stat, r in ch.results.items():
-            print()
-            print(f"{ch.name} [{ch.unit or '?'}] {stat.upper()}")
-            print(_stable32_table(r))
+            _say("")
+            _say(f"{ch.name} [{ch.unit or '?'}] {stat.upper()}")
+            _say(_stable32_table(r), multiline=True)
         for stat, why in ch.skipped.items():
-            print(f"\n{ch.name} {stat.upper()}: not computed — {why}")
+            _say("")
+            _say(f"{ch.name} {stat.upper()}: not computed — {why}")
 
 
 def _stable32_table(r: Any) -> str:
@@ -490,11 +506,11 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
         _atomic_npz(out, {"timestamp": t, **chans, "rate": np.float64(rate)})
     else:
         _atomic_npy(out, np.column_stack(list(chans.values())))
-    print(f"wrote {out}: {len(chans)} channels ({', '.join(f'{k} [{units[k.split(chr(95))[0]]}]' for k in chans)})"
-          f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", file=sys.stderr)
+    _say(f"wrote {out}: {len(chans)} channels ({', '.join(f'{k} [{units[k.split(chr(95))[0]]}]' for k in chans)})"
+          f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", err=True)
     if suffix == ".npy":
-        print(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
-              f" --rate {rate:g}", file=sys.stderr)
+        _say(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
+              f" --rate {rate:g}", err=True)
     return EXIT_OK
 
 
@@ -526,8 +542,8 @@ def _simulate_power_law(args: argparse.Namespace, out: Path, suffix: str) -> int
         _atomic_npz(out, {"timestamp": t, name: y, "rate": np.float64(rate)})
     else:
         _atomic_npy(out, y)
-    print(f"wrote {out}: power-law {name} noise {args.h}, {n:,} samples at {rate:g} Hz, seed {args.seed}",
-          file=sys.stderr)
+    _say(f"wrote {out}: power-law {name} noise {args.h}, {n:,} samples at {rate:g} Hz, seed {args.seed}",
+         err=True)
     return EXIT_OK
 
 
@@ -708,7 +724,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         args = parser.parse_args(argv)
     except _UsageError as exc:
-        print(str(exc), file=sys.stderr)
+        _say(str(exc), err=True)
         return EXIT_USAGE
     except SystemExit as exc:  # --help, --version
         return int(exc.code or 0)
@@ -746,10 +762,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if debug:
             raise
     except Terminated:
-        print("sigmatau: terminated (SIGTERM)", file=sys.stderr)
+        _say("sigmatau: terminated (SIGTERM)", err=True)
         return EXIT_TERMINATED
     except KeyboardInterrupt:
-        print("sigmatau: interrupted", file=sys.stderr)
+        _say("sigmatau: interrupted", err=True)
         return EXIT_INTERRUPTED
     except Exception as exc:  # a bug: say so in one line, traceback with --debug
         if debug:
@@ -759,7 +775,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         warnings.showwarning = old_show
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
-    print(f"sigmatau: error: {msg.splitlines()[0] if msg else 'failed'}", file=sys.stderr)
+    _say(f"sigmatau: error: {msg.strip() or 'failed'}", err=True)  # a newline in a file name stays "\\n"
     return code
 
 
