@@ -620,3 +620,57 @@ def test_stats_chunked_equals_in_memory(tmp_path, capsys):
     code, _, err = _run(["stats", tmp_path / "y.bin", "--chunked", "--rate", "1"], capsys)
     assert code == 2
     _one_line_error(err, "--dtype")
+
+
+# ------------------------------------------------------------- options tested end to end
+
+
+def test_axis_rule_mean(imu_csv, tmp_path, capsys):
+    out = tmp_path / "o"
+    code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures", "--no-report",
+                         "--axis-rule", "mean", "--quiet"], capsys)
+    assert code == 0, err
+    text = (out / "imu.yaml").read_text()
+    doc = yaml.safe_load(text)
+    assert "axes combined: mean of the axes" in text
+    data = json.loads((out / "results.json").read_text())
+    for group, key in (("gyro", "gyroscope_noise_density"), ("accel", "accelerometer_noise_density")):
+        per_axis = [c["model"]["si"]["N"]["value"] for c in data["channels"] if c["group"] == group]
+        assert len(per_axis) == 3 and all(v is not None for v in per_axis)
+        assert doc[key] == pytest.approx(sum(per_axis) / 3, rel=1e-12), key
+        assert doc[key] < max(per_axis)  # not the default rule (largest)
+
+
+def _timed_csv(path: Path, t, y) -> Path:
+    return _write(path, "t,gyro_x\n" + "".join(f"{a:.2f},{float(b)!r}\n" for a, b in zip(t, y)))
+
+
+def _table(out: str) -> str:
+    return out.split("\n", 1)[1]  # without the header line naming the file
+
+
+@pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
+@pytest.mark.parametrize("policy", ["unsorted", "duplicates"])
+def test_unsorted_and_duplicates_policies(policy, tmp_path, capsys):
+    rng = np.random.default_rng(31)
+    t, y = np.arange(3000) / 100.0, rng.standard_normal(3000)
+    ref = _timed_csv(tmp_path / "ok.csv", t, y)
+    if policy == "unsorted":  # two samples swapped: sorting by time restores the log
+        order = np.arange(3000)
+        order[[100, 101]] = [101, 100]
+        bad = _timed_csv(tmp_path / "bad.csv", t[order], y[order])
+        refuse, keep, warned = ["--unsorted", "refuse"], "--unsorted sort", "go backwards"
+    else:  # a repeated timestamp after the original with another value: keeping the first restores it
+        bad = _timed_csv(tmp_path / "bad.csv", np.insert(t, 201, t[200]), np.insert(y, 201, y[200] + 1.0))
+        refuse, keep, warned = ["--duplicates", "refuse"], "--duplicates drop", "repeat the timestamp"
+    base = ["stats", "--stat", "oadev,mdev"]
+    code, expected, err = _run([base[0], ref, *base[1:]], capsys)
+    assert code == 0 and err == "", err
+    code, got, err = _run([base[0], bad, *base[1:]], capsys)  # the default policy: repair with a warning
+    assert code == 0, err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and lines[0].startswith("sigmatau: warning:") and warned in lines[0], err
+    assert _table(got) == _table(expected)
+    code, _, err = _run([base[0], bad, *base[1:], *refuse], capsys)
+    assert code == 1
+    _one_line_error(err, "bad.csv", warned, keep)

@@ -396,3 +396,29 @@ def test_list_topics_escapes_control_characters(tmp_path, capsys):
     assert code == 0, err
     _assert_inert(out, keep="\n\t")  # the tabs between the fields are ours
     assert "/imu\\x1b]0;pwned\\x07\\x1b[2J\tsensor_msgs/msg/Imu\t10 messages" in out
+
+
+# ----------------------------------------------------------------------- resources
+
+
+@pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
+def test_figures_are_capped_and_the_cap_is_said_once(tmp_path, capsys, monkeypatch):
+    from sigmatau import outputs
+
+    monkeypatch.setattr(outputs, "MAX_SIGNAL_FIGURES", 2)
+    monkeypatch.setattr(outputs, "MAX_SIGMA_TAU_FIGURES", 1)
+    monkeypatch.setattr(outputs, "MAX_CURVES_PER_FIGURE", 2)
+    src = _log(tmp_path / "wide.csv", ["a", "b", "c"], np.random.default_rng(24), n=1000)
+    out = tmp_path / "o"
+    code, _, err = _run(["analyze", src, "--out", out, "--stat", "oadev", "--figures", "png", "--no-model",
+                         "--quiet"], capsys)
+    assert code == 0, err
+    warns = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(warns) == 1 and "figures limited" in warns[0] and "first 2 of 3 channels" in warns[0], err
+    assert sorted(p.name for p in out.glob("*.png")) == ["sigma_tau_other.png", "signal_a.png", "signal_b.png"]
+    data = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    assert "figures limited" in data["figures_note"] and len(data["channels"]) == 3
+    assert "figures limited" in (out / "report.html").read_text(encoding="utf-8")
+    with open(out / "statistics.csv", encoding="utf-8") as fh:
+        assert len({r[0] for r in csv.reader(fh)}) == 4  # the header and every channel
+

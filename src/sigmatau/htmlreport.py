@@ -168,7 +168,7 @@ def _kalibr_section(a: Any, yaml_text: Optional[str]) -> str:
 def _figures_section(figures: Sequence[dict], folder: Optional[Path], note: str) -> str:
     out = ['<h2 id="figures">Figures</h2>']
     if note:
-        out.append(f'<p class="flag">Figures not made: {_e(note)}</p>')
+        out.append(f'<p class="flag">{_e(note)}</p>')
     for f in figures:
         path = folder / f"{f['stem']}.png" if folder is not None else None
         if path is None or not path.is_file():
@@ -218,7 +218,7 @@ def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path
     yaml_text : str, optional
         The Kalibr YAML to show.
     figure_note : str
-        Why figures are missing, when they are.
+        Why figures are missing or fewer than the channels, when they are (shown as given).
     """
     a = analysis
     title = f"sigmatau report — {Path(a.log.source.path).name}"

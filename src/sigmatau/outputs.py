@@ -45,7 +45,8 @@ from .errors import ParameterError, SigmaTauError, SigmaTauWarning
 
 __all__ = ["write_outputs", "check_output_dir", "read_manifest", "remove_stale_partials", "kalibr_yaml",
            "statistics_csv", "model_csv", "csv_cell", "printable", "OutputExistsError", "FIGURE_FORMATS",
-           "KALIBR_KEYS", "MANIFEST", "PARTIAL_MARKER"]
+           "KALIBR_KEYS", "MANIFEST", "PARTIAL_MARKER", "MAX_SIGNAL_FIGURES", "MAX_SIGMA_TAU_FIGURES",
+           "MAX_CURVES_PER_FIGURE"]
 
 #: Figure formats :func:`write_outputs` can write.
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -340,27 +341,55 @@ def _safe_stem(text: str, taken: set[str]) -> str:
     return out
 
 
+#: Figures are capped so that a log of thousands of columns finishes in seconds, not minutes: at
+#: most this many signal figures (time series, PSD, lag plot; the first channels in log order) …
+MAX_SIGNAL_FIGURES = 24
+#: … at most this many σ–τ figures (one per sensor group, the first groups in log order) …
+MAX_SIGMA_TAU_FIGURES = 24
+#: … and at most this many channels drawn in one σ–τ figure (the first of the group). Every channel
+#: is still in results.json, the CSV tables and the report's tables.
+MAX_CURVES_PER_FIGURE = 12
+
+
+def _figure_cap_note(analysis: Any) -> str:
+    """One line saying which figures the caps leave out; empty when none."""
+    groups = [[c for c in chans if c.results] for chans in analysis.groups().values()]
+    groups = [g for g in groups if g]
+    parts = []
+    if len(analysis.channels) > MAX_SIGNAL_FIGURES:
+        parts.append(f"signal figures of the first {MAX_SIGNAL_FIGURES} of {len(analysis.channels):,} channels")
+    if len(groups) > MAX_SIGMA_TAU_FIGURES:
+        parts.append(f"σ–τ figures of the first {MAX_SIGMA_TAU_FIGURES} of {len(groups):,} groups")
+    crowded = max((len(g) for g in groups[:MAX_SIGMA_TAU_FIGURES]), default=0)
+    if crowded > MAX_CURVES_PER_FIGURE:
+        parts.append(f"at most {MAX_CURVES_PER_FIGURE} channels per σ–τ figure (largest group {crowded:,})")
+    if not parts:
+        return ""
+    return "figures limited to " + "; ".join(parts) + "; every channel is in results.json and the CSV tables"
+
+
 def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[str, Any]]:
-    """Write the figures; return their descriptions (file stem, caption, kind)."""
+    """Write the figures (within the caps above); return their descriptions (file stem, caption, kind)."""
     from . import plots
 
     made: list[dict[str, Any]] = []
     taken: set[str] = set()
-    for group, chans in analysis.groups().items():
-        with_results = [c for c in chans if c.results]
-        if not with_results:
-            continue
-        curves = [plots.ChannelCurves(c.name, c.unit, c.results, c.model) for c in with_results]
-        unit = with_results[0].unit
-        title = f"{group}: {', '.join(c.name for c in with_results)}"
+    groups = [(g, [c for c in chans if c.results]) for g, chans in analysis.groups().items()]
+    for group, with_results in [(g, cs) for g, cs in groups if cs][:MAX_SIGMA_TAU_FIGURES]:
+        shown = with_results[:MAX_CURVES_PER_FIGURE]
+        curves = [plots.ChannelCurves(c.name, c.unit, c.results, c.model) for c in shown]
+        unit = shown[0].unit
+        more = f" (first {len(shown)} of {len(with_results):,})" if len(shown) < len(with_results) else ""
+        title = f"{group}: {', '.join(c.name for c in shown)}{more}"
         fig = plots.sigma_tau_figure(curves, title=title, datasheet=_datasheet_for(analysis, group, unit))
         stem = _safe_stem(f"sigma_tau_{group}", taken)
         plots.save_figure(fig, folder / stem, formats=formats)
         made.append({"stem": stem, "kind": "sigma-tau", "group": group,
-                     "caption": f"σ–τ of the {group} channels with {analysis.settings['confidence']:.1%} intervals"
-                                " (bands), the fitted noise model and its terms, read-off points and slope guides"})
+                     "caption": f"σ–τ of the {group} channels{more} with {analysis.settings['confidence']:.1%}"
+                                " intervals (bands), the fitted noise model and its terms, read-off points and"
+                                " slope guides"})
     log = analysis.log
-    for c in analysis.channels:
+    for c in analysis.channels[:MAX_SIGNAL_FIGURES]:
         fig = plots.signal_figure(log[c.name], rate=log.rate, name=c.name, unit=c.unit, model=c.model)
         stem = _safe_stem(f"signal_{c.name}", taken)
         plots.save_figure(fig, folder / stem, formats=formats)
@@ -700,8 +729,12 @@ def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool) -
         except SigmaTauError as exc:  # matplotlib missing: everything else is still useful
             if "matplotlib" not in str(exc) and "plot" not in str(exc):
                 raise
-            figure_note = str(exc)
+            figure_note = f"Figures not made: {exc}"
             warnings.warn(f"figures not written: {exc}", SigmaTauWarning, stacklevel=3)
+        else:
+            figure_note = _figure_cap_note(analysis)
+            if figure_note:
+                warnings.warn(figure_note, SigmaTauWarning, stacklevel=3)
     data = analysis.to_dict()
     data["figures"] = [{**f, "files": [f"{f['stem']}.{e}" for e in fmts]} for f in figs]
     if figure_note:
