@@ -10,7 +10,11 @@ Sources and what each test ties to:
 * numerics.md §5.1 and dt0064.md — the design tip's slope table.
 * numerics.md §6.1/§6.3 — Kasdin–Walter noise with a known h_α, and the
   response constants the power-law fit uses.
-* tests/data/allantools — the Alpha column of Stable32 tables.
+* tests/data/allantools — the Alpha column of Stable32 tables, on every row (lag-1
+  and B1 rows, octave, decade and all-τ grids).
+
+Monte-Carlo checks are statistical: many runs, and a binomial bound derived from the
+method's published or documented error rate, never a list of seeds that happen to pass.
 
 Noise is generated here by the Kasdin–Walter fractional-difference filter
 (numerics.md §6.1) so that every level h_α is known exactly.
@@ -32,6 +36,7 @@ from sigmatau.noiseid import (
     NOISE_NAMES,
     InsufficientDataError,
     b1_expected,
+    b1_min_averages,
     b1_noise_id,
     b1_ratio,
     fit_power_law,
@@ -116,39 +121,61 @@ def test_lag1_nbs_reference_values():
 
 # -------------------------------------------- lag-1 ACF: Monte-Carlo table (§5.2)
 
-# Fractions correct measured with this file's generator (seeded, 50 runs of
-# N = 16384; α̂ is the mean fractional estimate):
+# numerics.md §5.2 publishes the fraction of correct identifications in 50 runs of
+# N = 16384 points (independent implementation); per case the lowest value of its range:
 #
-#   data, α              m = 1   m = 8   mean α̂ (m = 8)   table (m = 1 / m = 8)
-#   phase, WPM            1.00    1.00     2.00              1.00 / 1.00
-#   phase, FPM            1.00    0.86     1.41              1.00 / 0.72–0.78
-#   phase, WFM            1.00    1.00    −0.01              1.00 / 1.00
-#   phase, FFM            1.00    0.90    −1.42              1.00 / 0.80–0.94
-#   phase, RWFM           1.00    1.00    −2.39              1.00 / 1.00
-#   freq,  FWFM (dmax 3)  1.00    0.00    −3.91              1.00 / 0.00
-#   freq,  RRFM (dmax 3)  1.00    0.00    −5.52              1.00 / 0.00
+#   data, α              m = 1   m = 8
+#   phase, WPM            1.00    1.00
+#   phase, FPM            1.00    0.72
+#   phase, WFM            1.00    1.00
+#   phase, FFM            1.00    0.80
+#   phase, RWFM           1.00    1.00
+#   freq,  FWFM (dmax 3)  1.00    0.00   (α̂ ≈ −3.9 rounds to RRFM, numerics §8 item 3)
+#   freq,  RRFM (dmax 3)  1.00    0.00   (α̂ ≈ −5.3 rounds to −5)
 #
-# At m = 8, FWFM is called RRFM by rounding (α̂ ≈ −3.9, numerics §8 item 3) and
-# RRFM rounds to −5, outside every family; identify() with the Hadamard family
-# clips that to −4 and so names RRFM correctly in all 50 runs.
-MC_RUNS = 50
+# The test runs MC_RUNS series per case and asks whether our rate is consistent with
+# the published one: from k published successes of 50 the rate is at least the 99 %
+# Clopper–Pearson lower bound p_lo (0.912 for 50/50, 0.55 for 36/50); our count X of
+# MC_RUNS must not fall below the 0.1 % quantile of Binomial(MC_RUNS, p_lo). For the
+# documented misidentifications (0/50 correct) X must not exceed the 99.9 % quantile of
+# Binomial(MC_RUNS, p_hi), p_hi = 0.088 the 99 % upper bound. With 14 comparisons a
+# correct method fails one by chance with probability below 1.4 %.
+# Measured (200 runs; correct at m = 1 and m = 8 of 200, mean α̂ at m = 8): WPM 200, 200,
+# 2.00; FPM 200, 153, 1.43; WFM 200, 200, −0.00; FFM 200, 172, −1.43; RWFM 200, 200,
+# −2.39; FWFM 200, 0, −3.91; RRFM 200, 1, −5.52.
+# At m = 8 identify() with the Hadamard family clips RRFM's −5 to −4 and so names it.
+MC_RUNS = 200
 MC_N = 16384
-MC_CASES = [  # α, data type, dmax, least fraction correct at m = 1 and at m = 8
-    (2, "phase", 2, 1.0, 1.0),
-    (1, "phase", 2, 1.0, 0.72),
-    (0, "phase", 2, 1.0, 1.0),
-    (-1, "phase", 2, 1.0, 0.80),
-    (-2, "phase", 2, 1.0, 1.0),
-    (-3, "freq", 3, 1.0, None),
-    (-4, "freq", 3, 1.0, None),
+MC_PUBLISHED_RUNS = 50
+MC_ALPHA = 1e-3
+MC_CASES = [  # α, data type, dmax, published correct of 50 at m = 1 and at m = 8
+    (2, "phase", 2, 50, 50),
+    (1, "phase", 2, 50, 36),
+    (0, "phase", 2, 50, 50),
+    (-1, "phase", 2, 50, 40),
+    (-2, "phase", 2, 50, 50),
+    (-3, "freq", 3, 50, 0),
+    (-4, "freq", 3, 50, 0),
 ]
+
+
+def _binomial_bounds(published: int, runs: int) -> tuple[int, int]:
+    """Least and greatest count of ``runs`` consistent with ``published`` of 50 (see above)."""
+    from scipy import stats
+
+    n = MC_PUBLISHED_RUNS
+    p_lo = stats.beta.ppf(0.01, published, n - published + 1) if published > 0 else 0.0
+    p_hi = stats.beta.ppf(0.99, published + 1, n - published) if published < n else 1.0
+    least = int(stats.binom.ppf(MC_ALPHA, runs, p_lo))
+    most = int(stats.binom.isf(MC_ALPHA, runs, p_hi)) if p_hi < 1.0 else runs
+    return least, most
 
 
 @pytest.fixture(scope="module")
 def mc_lag1():
     out = {}
     for alpha, dtype, dmax, _, _ in MC_CASES:
-        rng = np.random.default_rng(1000 + alpha)
+        rng = np.random.default_rng([20261124, alpha + 10])
         runs = {1: [], 8: []}
         hadamard_rrfm = []
         for _ in range(MC_RUNS):
@@ -161,20 +188,36 @@ def mc_lag1():
     return out
 
 
-@pytest.mark.parametrize("alpha, dtype, dmax, least_m1, least_m8", MC_CASES)
-def test_lag1_monte_carlo_fractions(mc_lag1, alpha, dtype, dmax, least_m1, least_m8):
+def test_binomial_bounds_of_the_published_table():
+    # Closed forms of the 99 % Clopper–Pearson bounds at the ends: 50/50 gives
+    # p_lo = 0.01**(1/50) = 0.912, 0/50 gives p_hi = 1 − 0.01**(1/50) = 0.088; the
+    # count bounds are the 0.1 % / 99.9 % binomial quantiles at those rates.
+    from scipy import stats
+
+    p_lo = 0.01 ** (1 / 50)
+    least, most = _binomial_bounds(50, MC_RUNS)
+    assert most == MC_RUNS
+    assert stats.binom.cdf(least - 1, MC_RUNS, p_lo) <= MC_ALPHA < stats.binom.cdf(least, MC_RUNS, p_lo)
+    _, most = _binomial_bounds(0, MC_RUNS)
+    assert stats.binom.sf(most, MC_RUNS, 1 - p_lo) <= MC_ALPHA < stats.binom.sf(most - 1, MC_RUNS, 1 - p_lo)
+
+
+@pytest.mark.parametrize("alpha, dtype, dmax, published_m1, published_m8", MC_CASES)
+def test_lag1_identification_rate_binomial(mc_lag1, alpha, dtype, dmax, published_m1, published_m8):
     runs, hadamard_rrfm = mc_lag1[alpha]
-    frac = {m: np.mean([r.alpha == alpha for r in rs]) for m, rs in runs.items()}
+    correct = {m: int(sum(r.alpha == alpha for r in rs)) for m, rs in runs.items()}
+    for m, published in ((1, published_m1), (8, published_m8)):
+        least, most = _binomial_bounds(published, MC_RUNS)
+        assert least <= correct[m] <= most, (alpha, m, correct[m], (least, most))
     est8 = np.mean([r.alpha_estimate for r in runs[8]])
-    assert frac[1] >= least_m1
-    if least_m8 is not None:
-        assert frac[8] >= least_m8
-    elif alpha == -3:  # the documented misidentification: FWFM → RRFM
-        assert frac[8] <= 0.1 and est8 == pytest.approx(-3.9, abs=0.15)
-        assert np.mean([r.alpha == -4 for r in runs[8]]) >= 0.9
-    else:  # RRFM: α̂ far below −4, rounds to −5; the Hadamard family clips it to −4
-        assert frac[8] <= 0.1 and est8 < -4.9
-        assert np.mean(np.array(hadamard_rrfm) == -4) >= 0.9
+    if alpha == -3:  # the documented misidentification: FWFM → RRFM
+        assert est8 == pytest.approx(-3.9, abs=0.15)
+        least, _ = _binomial_bounds(MC_PUBLISHED_RUNS, MC_RUNS)
+        assert sum(r.alpha == -4 for r in runs[8]) >= least
+    elif alpha == -4:  # α̂ far below −4 rounds to −5; the Hadamard family clips it to −4
+        assert est8 < -4.9
+        least, _ = _binomial_bounds(MC_PUBLISHED_RUNS, MC_RUNS)
+        assert int(np.sum(np.array(hadamard_rrfm) == -4)) >= least
 
 
 # ------------------------------------------------------------------ B1 (§5.3)
@@ -210,8 +253,8 @@ def test_b1_monte_carlo_means(alpha, mu, published_mc):
         warnings.simplefilter("ignore", sigmatau.RangeWarning)
         for _ in range(1000):
             y = noise(alpha, nb * m, rng)
-            s2.append(sigmatau.stdev(y, m=[m]).var[0])
-            avar.append(sigmatau.adev(y, m=[m]).var[0])
+            s2.append(sigmatau.stdev(y, m=[m], ci=None).var[0])
+            avar.append(sigmatau.adev(y, m=[m], ci=None).var[0])
             if len(s2) <= 3:
                 assert b1_ratio(y, m) == pytest.approx(s2[-1] / avar[-1], rel=1e-10)
     mean = float(np.mean(s2) / np.mean(avar))
@@ -258,15 +301,19 @@ def test_rn_ratio_monte_carlo():
     assert fpm == pytest.approx(float(rn_expected(16, 1)), rel=0.15)
 
 
-def test_identify_uses_rn_for_the_modified_family():
-    # 150 phase points: ⌊N/m⌋ < 30 at m = 8, 10, 12 → B1, which says μ = −2
+def test_identify_splits_wpm_from_fpm_with_rn_for_every_family():
+    # 150 phase points: ⌊N/m⌋ < 30 at m = 8, 10, 12 → B1, which says μ = −2 (WPM or
+    # FPM). Stable32's manual splits them with R(n) for the modified family only and
+    # reports α = 1 (FPM) for the others; white PM called FPM made OADEV/OHDEV
+    # intervals cover 99.9 % instead of 68.3 % (test_confidence_mc), so every family
+    # uses R(n) (no row of the Stable32 tables changes).
     rng = np.random.default_rng(80)
     x = noise(2, 150, rng, "phase")
     ms = [8, 10, 12]
-    allan = identify(x, ms, data_type="phase", family="oadev")
-    modified = identify(x, ms, data_type="phase", family="mdev")
-    assert allan.method == ("b1",) * 3 and allan.alpha.tolist() == [1, 1, 1]
-    assert modified.method == ("b1+rn",) * 3 and modified.alpha.tolist() == [2, 2, 2]
+    for family in ("oadev", "mdev", "ohdev", "allan"):
+        r = identify(x, ms, data_type="phase", family=family)
+        assert r.method == ("b1+rn",) * 3 and r.alpha.tolist() == [2, 2, 2], family
+
 
 
 # ------------------------------------------------------------- identify (§5.5)
@@ -439,6 +486,105 @@ def test_stable32_htot_on_frequency_reads_the_data_as_phase():
     assert as_freq.tolist() == [0] * int(rows.sum())
 
 
+# Every row, also where fewer than 30 points remain (B1). Stable32 compares the B1
+# ratio with its expectation B1(N, μ) for N = the statistic's number of terms (the "#"
+# column), and applies B1 only while the Nb = ⌊M/m⌋ averages number at least twice the
+# statistic's stop ratio, carrying α from the preceding τ beyond (identify, Notes).
+# Agreement over all rows of these 55 tables (4818 rows), before → after that rule:
+# 4142 (86.0 %) → 4787 (99.4 %); per dense table, e.g. phase_dat_oadev 121/139 →
+# 139/139, phase_dat_mtotdev 118/158 → 158/158, ocxo oadev all-τ 212/273 → 271/273.
+# The 31 rows left: the Keysight ADEV d = 1 rows and the rounding-boundary rows of
+# test_stable32_alpha_column_on_lag1_rows (9 + 20), and phase_dat_totdev_octave.txt
+# m = 128, 256, where that octave run says 0 although Stable32's all-τ TOTDEV run of
+# the same file says 1 at m = 123…147 (its B1 ratio is 0.67–0.78, well inside WPM/FPM)
+# — the octave run carried α from m = 64; no rule reproduces both runs.
+# (Outside the repository, on the 1253-point Sr87 record of allantoolkit's test assets,
+# all 60 octave, decade and all-τ tables: 3938/4010 → 4010/4010 rows.)
+_ALPHA_EXCEPTIONS = {"phasedat/phase_dat_totdev_octave.txt": 7}
+
+
+def test_stable32_alpha_column_on_every_row():
+    data_cache = {}
+    total = agree = 0
+    for rel, table in _alpha_tables():
+        folder = rel.split("/")[0]
+        loader, dtype, rate = _DATASETS[folder]
+        if folder not in data_cache:
+            data_cache[folder] = loader()
+        got = identify(data_cache[folder], table.af, data_type=dtype, family=_statistic(rel), rate=rate,
+                       n_terms=table.n)
+        same = int(np.sum(got.alpha == table.alpha))
+        total += table.af.size
+        agree += same
+        least = _ALPHA_EXCEPTIONS.get(rel, math.ceil(0.95 * table.af.size))
+        assert same >= least, (rel, same, table.af.size, got.alpha.tolist(), table.alpha.tolist())
+    assert total == 4818
+    assert agree >= 4787, agree
+
+
+def _statistic(filename: str) -> str:
+    """The statistic a Stable32 table was computed with (its name decides the rules)."""
+    name = filename.lower().rsplit("/", 1)[-1]
+    for token, stat in (("htot", "htotdev"), ("mtot", "mtotdev"), ("ttot", "ttotdev"), ("totdev", "totdev"),
+                        ("ohdev", "ohdev"), ("hdev", "hdev"), ("mdev", "mdev"), ("tdev", "tdev"),
+                        ("oadev", "oadev"), ("adev", "adev")):
+        if token in name:
+            return stat
+    raise AssertionError(filename)
+
+
+@pytest.mark.parametrize("rel", ["phasedat/phase_dat_adev.txt", "phasedat/phase_dat_oadev.txt",
+                                 "phasedat/phase_dat_mdev.txt", "phasedat/phase_dat_hdev.txt",
+                                 "phasedat/phase_dat_totdev.txt", "phasedat/phase_dat_mtotdev.txt"])
+def test_default_path_alpha_on_a_dense_grid(rel):
+    # What users get: the statistic itself (its n → identify) on an all-τ grid of the
+    # 1001-point PHASE.DAT. Before: 112/125, 121/139, 121/139, 112/125, 157/185, 118/158
+    # rows agreed and α changed 22–40 times between neighbouring τ where Stable32
+    # changes 11–23 times. Now every row agrees, so α changes exactly where Stable32's does.
+    table = refdata.load_table(rel)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sigmatau.RangeWarning)
+        res = getattr(sigmatau, _statistic(rel))(refdata.phase_dat(), data_type="phase", m=table.af)
+    np.testing.assert_array_equal(res.alpha, table.alpha)
+
+
+def test_b1_applies_only_with_enough_averages_then_carries():
+    # 1001 phase points, M = 1000: OADEV needs Nb ≥ 8 (m ≤ 125), ADEV Nb ≥ 10 (m ≤ 100),
+    # TOTDEV Nb ≥ 4 (m ≤ 250); beyond, α is that of the preceding identified factor.
+    assert [b1_min_averages(s) for s in ("adev", "hdev", "oadev", "mdev", "tdev", "ohdev")] == [10, 10, 8, 8, 8, 8]
+    assert [b1_min_averages(s) for s in ("totdev", "mtotdev", "ttotdev", "htotdev")] == [4, 6, 6, 6]
+    assert [b1_min_averages(s) for s in ("allan", "modified", "hadamard", "theo1")] == [3, 3, 3, 3]
+    x = refdata.phase_dat()
+    ms = [50, 100, 101, 125, 126, 250, 251, 333]
+    for stat, last in (("adev", 100), ("oadev", 125), ("totdev", 250)):
+        r = identify(x, ms, data_type="phase", family=stat)
+        computed = [m for m, tag in zip(ms, r.method) if tag != "carried"]
+        assert computed == [m for m in ms if m <= last], (stat, r.method)
+        i_last = ms.index(last)
+        assert np.all(r.alpha[i_last:] == r.alpha[i_last]) and np.all(np.isnan(r.alpha_estimate[i_last + 1:]))
+
+
+def test_n_terms_sets_the_b1_expectation():
+    # B1 with N = n_terms: for n_terms ≫ Nb the WFM/FFM boundary sqrt(B1(N, 0)) rises
+    # from 1.36 (Nb = 10) to 2.33 (N = 900), so a ratio of 1.5 reads WFM, not FFM.
+    rng = np.random.default_rng(7)
+    y = noise(0, 1000, rng)
+    ratio = b1_ratio(y, 100)
+    r_nb = b1_noise_id(y, 100)
+    r_n = b1_noise_id(y, 100, n_expected=900)
+    assert r_nb.nb == r_n.nb == 10 and r_nb.ratio == r_n.ratio == ratio
+    for res, n in ((r_nb, 10), (r_n, 900)):
+        expected = b1_expected(n, np.array([-2, -1, 0, 1, 2.0]))
+        mu = [-2, -1, 0, 1, 2][int(np.searchsorted(np.sqrt(expected[:-1] * expected[1:]), ratio))]
+        assert res.mu == mu
+    with pytest.raises(ParameterError, match="n_terms"):
+        identify(y, [1, 2], n_terms=[5])
+    with pytest.raises(ParameterError, match="n_terms"):
+        identify(y, [1, 2], n_terms=[5, -1])
+    with pytest.raises(ParameterError, match="n_expected"):
+        b1_noise_id(y, 100, n_expected=2.5)
+
+
 # ------------------------------------------------------------- Theo κ (§3, §5.5)
 
 
@@ -571,32 +717,44 @@ def _mix(rng: np.random.Generator, n: int = 1 << 16) -> np.ndarray:
     return y
 
 
-@pytest.fixture(scope="module")
-def mixes():
-    return [_mix(np.random.default_rng(seed)) for seed in range(4)]
+FIT_RUNS = 40
+FIT_CASES = (("oadev", (2, 0, -2)), ("mdev", None), ("ohdev", None))
 
 
-# z-scores of the three h over 40 seeds (measured while writing this file):
-# SD 0.6–1.3 and max |z| 2.3–3.2 across OADEV/ADEV/MDEV/OHDEV; without the
-# τ-correlation term the RWFM z-scores had SD ≈ 2 and reached 7. With the
-# default candidates (MDEV, OHDEV), seeds 4–29 fail this test in 4 of 52 fits:
-# a flicker-FM term is kept (3σ) and takes over part of the long-τ RWFM, the
-# pair the few long-τ points cannot split well; seeds 0–3 are not among them.
-@pytest.mark.parametrize("stat, alphas", [("oadev", (2, 0, -2)), ("mdev", None), ("ohdev", None)])
-def test_fit_power_law_recovers_known_levels(mixes, stat, alphas):
-    for y in mixes:
-        result = getattr(sigmatau, stat)(y, rate=RATE)
-        fit = fit_power_law(result, alphas=alphas)
-        for alpha, h in H_TRUE.items():
-            assert alpha in fit.kept, (stat, fit)
-            z = (fit.h[alpha] - h) / fit.h_err[alpha]
-            assert abs(z) < 3, (stat, alpha, fit)
-        # a spurious extra term may survive, but must stay a minor part of the curve
-        total = fit.variance(result.taus)
-        for alpha in set(fit.kept) - set(H_TRUE):
-            assert np.all(fit.term(alpha, result.taus) < 0.25 * total), (stat, fit)
-        assert np.allclose(total, sum(fit.terms(result.taus).values()))
-        assert np.allclose(fit.deviation(result.taus) ** 2, total)
+def _fit_fails(stat: str, alphas, y: np.ndarray) -> bool:
+    """One fit of the WPM + WFM + RWFM mix; True if it misses a term, a level by ≥ 3σ,
+    or keeps a spurious term that makes up a quarter of the curve anywhere."""
+    result = getattr(sigmatau, stat)(y, rate=RATE)
+    fit = fit_power_law(result, alphas=alphas)
+    total = fit.variance(result.taus)
+    assert np.allclose(total, sum(fit.terms(result.taus).values()))
+    assert np.allclose(fit.deviation(result.taus) ** 2, total)
+    if any(alpha not in fit.kept for alpha in H_TRUE):
+        return True
+    if any(abs(fit.h[alpha] - h) >= 3 * fit.h_err[alpha] for alpha, h in H_TRUE.items()):
+        return True
+    return any(np.any(fit.term(alpha, result.taus) >= 0.25 * total) for alpha in set(fit.kept) - set(H_TRUE))
+
+
+def test_fit_power_law_recovers_known_levels(rng):
+    # A statistical test over FIT_RUNS mixes (3 fits each), not a list of seeds that pass.
+    # Known error rate of a fit: the docstring's calibration (z-scores with unit spread
+    # within ±30 %, so SD ≤ 1.3) puts |z| ≥ 3 for one of three terms at
+    # 1 − (2Φ(3/1.3) − 1)³ = 6.2 %; the documented selection failure (a flicker-FM term
+    # kept at 3σ takes over part of the long-τ RWFM: 4 of 52 MDEV/OHDEV fits when this
+    # test was first written) adds 7.7 %: p0 = 0.139. The failures must not exceed the
+    # 99.9 % quantile of Binomial(3·FIT_RUNS, p0). Measured over 200 other mixes: 5, 13,
+    # 15 failures of 200 for OADEV, MDEV, OHDEV (5.5 %); z-scores with SD ≈ 2 (no
+    # τ-correlation term) would fail about 35 % of fits.
+    from scipy import stats
+
+    p0 = 1.0 - (2.0 * stats.norm.cdf(3.0 / 1.3) - 1.0) ** 3 + 4.0 / 52.0
+    fails = 0
+    for _ in range(FIT_RUNS):
+        y = _mix(rng)
+        fails += sum(_fit_fails(stat, alphas, y) for stat, alphas in FIT_CASES)
+    fits = FIT_RUNS * len(FIT_CASES)
+    assert fails <= stats.binom.isf(1e-3, fits, p0), (fails, fits)
 
 
 def test_fit_power_law_drops_unsupported_terms():
