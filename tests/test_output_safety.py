@@ -422,3 +422,30 @@ def test_figures_are_capped_and_the_cap_is_said_once(tmp_path, capsys, monkeypat
     with open(out / "statistics.csv", encoding="utf-8") as fh:
         assert len({r[0] for r in csv.reader(fh)}) == 4  # the header and every channel
 
+
+
+# ------------------------------------------------------------------------ messages
+
+
+def test_no_message_offers_an_option_that_would_be_refused(tmp_path, capsys, one_channel):
+    folder = tmp_path / "x.csv"
+    folder.mkdir()
+    fifo = tmp_path / "pipe.csv"
+    os.mkfifo(fifo)
+    cases = [(["simulate", folder, "--duration", "10"], "is a directory"),
+             (["stats", one_channel, "--stat", "oadev", "--csv", folder], "is a directory"),
+             (["stats", one_channel, "--stat", "oadev", "--csv", fifo], "not a regular file")]
+    for argv, why in cases:
+        for extra in ([], ["--force"]):
+            code, _, err = _run([*argv, *extra], capsys)
+            assert code == 2, (argv, extra, err)
+            line = _one_line_error(err, why)
+            assert "--force" not in line, line
+    assert folder.is_dir() and not any(folder.iterdir()) and fifo.exists() and not fifo.is_file()
+    # where --force is accepted, it is offered
+    made = tmp_path / "made.csv"
+    assert _run(["simulate", made, "--duration", "10"], capsys)[0] == 0
+    code, _, err = _run(["simulate", made, "--duration", "10"], capsys)
+    assert code == 2
+    _one_line_error(err, "exists", "--force")
+    assert _run(["simulate", made, "--duration", "10", "--force"], capsys)[0] == 0

@@ -331,10 +331,7 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         target, source = Path(args.csv).resolve(), Path(args.log).resolve()
         if target == source or source in target.parents:
             raise _UsageError(f"--csv {args.csv!r} is the input; choose another file")
-        if target.is_dir():
-            raise _UsageError(f"--csv {args.csv!r} is a directory")
-        if target.exists() and not args.force:
-            raise _UsageError(f"{args.csv!r} exists; use --force to replace it")
+        _check_replaceable(Path(args.csv), "--csv", args.force, stdout_hint=True)
     if args.chunked:
         return _stats_chunked(args)
     log = _read(args, console)
@@ -413,6 +410,20 @@ def _stable32_table(r: Any) -> str:
     return "\n".join("  ".join(c.rjust(w) for c, w in zip(row, widths)) for row in rows)
 
 
+def _check_replaceable(path: Path, what: str, force: bool, *, stdout_hint: bool = False) -> None:
+    """A file the command may write: new, or with ``force`` an existing regular file (never a
+    directory, device or pipe, which renaming over would destroy); --force is offered only where
+    it would be accepted."""
+    if not os.path.lexists(path):
+        return
+    if path.is_symlink() or not path.is_file():
+        kind = "a directory" if path.is_dir() else "not a regular file"
+        hint = "; use '-' for standard output" if stdout_hint else "; choose a file name"
+        raise _UsageError(f"{what} {str(path)!r} is {kind}{hint}")
+    if not force:
+        raise _UsageError(f"{what} {str(path)!r} exists; use --force to replace it")
+
+
 def _atomic_write(path: Path, data: bytes) -> None:
     """Write through a temporary file in the same directory and rename it into place."""
     from .outputs import umask
@@ -462,8 +473,7 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
     suffix = out.suffix.lower()
     if suffix not in (".csv", ".npy", ".npz"):
         raise _UsageError(f"output {str(out)!r} must end in .csv, .npy or .npz")
-    if out.exists() and not args.force:
-        raise _UsageError(f"{str(out)!r} exists; use --force to replace it")
+    _check_replaceable(out, "output", args.force)
     if args.duration <= 0:
         raise _UsageError(f"--duration {args.duration!r} must be positive")
     if args.rate is not None and args.rate <= 0:
