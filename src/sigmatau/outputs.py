@@ -542,6 +542,8 @@ def check_output_dir(out_dir: Union[str, os.PathLike], *, force: bool = False,
 
 
 def _pid_alive(pid: int) -> bool:
+    if os.name == "nt":  # os.kill(pid, 0) would terminate the process there: never judge, keep the directory
+        return True
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
