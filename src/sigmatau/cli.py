@@ -37,12 +37,12 @@ DEMO_IMU = {
 }
 
 
-class Terminated(KeyboardInterrupt):
+class _Terminated(KeyboardInterrupt):
     """SIGTERM, raised in the main thread so that the same clean-up as for Ctrl-C runs."""
 
 
 def _on_sigterm(signum: int, frame: Any) -> None:
-    raise Terminated()
+    raise _Terminated()
 
 
 class _UsageError(Exception):
@@ -310,7 +310,7 @@ def _cmd_demo(args: argparse.Namespace, console: _Console) -> int:
     out = _check_out(args, Path("sigmatau-demo"))
     n = int(round(args.duration * args.rate))
     _say(f"demo: simulating a 6-axis LSM6DSL-like IMU, {args.duration / 3600:.3g} h at {args.rate:g} Hz"
-          f" ({n:,} samples per axis, seed {args.seed})", err=True)
+         f" ({n:,} samples per axis, seed {args.seed})", err=True)
     channels = _simulated_imu(args.duration, args.rate, args.seed)
     units = {k: ("rad/s" if k.startswith("gyro") else "m/s^2") for k in channels}
     log = log_from_arrays(channels, rate=args.rate, units=units,
@@ -517,10 +517,10 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
     else:
         _atomic_npy(out, np.column_stack(list(chans.values())))
     _say(f"wrote {out}: {len(chans)} channels ({', '.join(f'{k} [{units[k.split(chr(95))[0]]}]' for k in chans)})"
-          f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", err=True)
+         f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", err=True)
     if suffix == ".npy":
         _say(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
-              f" --rate {rate:g}", err=True)
+             f" --rate {rate:g}", err=True)
     return EXIT_OK
 
 
@@ -771,7 +771,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         code, msg = EXIT_DATA, f"{exc.strerror or exc}: {exc.filename}" if exc.filename else str(exc)
         if debug:
             raise
-    except Terminated:
+    except _Terminated:
         _say("sigmatau: terminated (SIGTERM)", err=True)
         return EXIT_TERMINATED
     except KeyboardInterrupt:
