@@ -13,7 +13,9 @@ from typing import Callable, Optional
 
 import numpy as np
 
-from ._input import as_series, check_data_type, check_rate, remove_linear_phase, to_phase
+from ._input import (
+    as_series, check_data_type, check_rate, remove_linear_phase, scale_to_unit, to_phase, unscale_variance,
+)
 from ._uncertainty import attach, check_options
 from .confidence import ONE_SIGMA
 from .errors import DataError, ParameterError
@@ -78,17 +80,29 @@ def _is_chunked(data: object) -> bool:
     return module == "sigmatau.chunked" or module.startswith("dask.")
 
 
-def _validated(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str, int]:
-    """Validated ``(samples, rate, data_type, n_points)``; N = number of phase points."""
+def _offset_free(stat: Statistic, data_type: str) -> bool:
+    """The statistic ignores a constant added to the data: every one does to phase (they use
+    phase differences only); to frequency only those that ignore a frequency offset."""
+    return data_type == "phase" or stat.trend_invariant
+
+
+def _validated(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str, int, int]:
+    """Validated ``(samples, rate, data_type, n_points, k)``; N = number of phase points.
+
+    The samples are scaled by the exact power of two 2**-k that brings their largest
+    magnitude into [0.5, 1) (:func:`~sigmatau._input.scale_to_unit`); integer data
+    beyond ±2**53 are first taken exactly relative to their first value when the
+    statistic ignores that offset.
+    """
     rate_f = check_rate(rate)
     dtype = check_data_type(data_type)
-    series = as_series(data)
+    series, k = scale_to_unit(as_series(data, remove_offset=_offset_free(stat, dtype)))
     n_points = series.size if dtype == "phase" else series.size + 1
     if n_points < stat.min_points:
         kind = "phase" if dtype == "phase" else "frequency"
         need = stat.min_points if dtype == "phase" else stat.min_points - 1
         raise DataError(f"{stat.name} needs at least {need} {kind} samples, got {series.size}")
-    return series, rate_f, dtype, n_points
+    return series, rate_f, dtype, n_points, k
 
 
 def _phase_of(stat: Statistic, series: np.ndarray, rate: float, dtype: str) -> np.ndarray:
@@ -99,15 +113,33 @@ def _phase_of(stat: Statistic, series: np.ndarray, rate: float, dtype: str) -> n
     return remove_linear_phase(series)
 
 
+#: Largest |binary exponent| of the phase :func:`prepare` hands out: its squares and their
+#: sums over any record (< 2**60 terms) stay inside float64's normal range.
+_PREPARE_EXPONENT = 450
+
+
 def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> tuple[np.ndarray, float, str]:
     """Validate the data and return ``(phase, rate, data_type)``.
 
-    The phase has its linear trend removed when the statistic is invariant to it.
+    The phase has its linear trend removed when the statistic is invariant to it,
+    and is in the user's unit (not scaled). Its magnitude is checked so that the
+    caller's kernel cannot overflow or underflow: a phase beyond 2**±450
+    (≈ 1e±135) is a DataError. :func:`finish` checks the variance again.
     """
     if _is_chunked(data):
         raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
-    series, rate_f, dtype, _ = _validated(stat, data, rate, data_type)
-    return _phase_of(stat, series, rate_f, dtype), rate_f, dtype
+    series, rate_f, dtype, _, k = _validated(stat, data, rate, data_type)
+    x_unit = _phase_of(stat, series, rate_f, dtype)
+    with np.errstate(over="ignore", under="ignore"):  # an inf or 0 peak is refused below
+        x = np.ldexp(x_unit, k)
+    peak = float(np.max(np.abs(x)))
+    if peak != 0.0 and not 2.0 ** -_PREPARE_EXPONENT <= peak <= 2.0 ** _PREPARE_EXPONENT:
+        raise DataError(
+            f"{stat.name}: the phase of these data reaches {peak:.3g}, outside the range this statistic"
+            f" computes safely ({2.0 ** -_PREPARE_EXPONENT:.1e} … {2.0 ** _PREPARE_EXPONENT:.1e});"
+            " rescale the data (another unit) or change the rate"
+        )
+    return x, rate_f, dtype
 
 
 def run(
@@ -130,6 +162,12 @@ def run(
     None, each row also gets its noise type, EDF and interval
     (:mod:`sigmatau._uncertainty`); ``raw=True`` skips that step for callers
     that attach it themselves (after a bias correction, for instance).
+
+    The kernel runs on the data scaled by an exact power of two, 2**-k, into
+    [0.5, 1) and the variance is multiplied back by 4**k: every statistic is
+    homogeneous of degree two (var(c·x) = c²·var(x)), so the result is the same
+    while no intermediate square can overflow or underflow. A variance that
+    float64 cannot hold is a DataError, never inf or 0.
     """
     if _is_chunked(data):
         from .chunked import _run
@@ -137,7 +175,7 @@ def run(
         return _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
                     alpha=alpha, confidence=confidence, ci=ci, raw=raw)
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
-    series, rate_f, dtype, n_points = _validated(stat, data, rate, data_type)
+    series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
     given = series
     use_freq = dtype == "freq" and stat.compute_freq is not None
     if use_freq:
@@ -165,7 +203,7 @@ def run(
         var, n = np.empty(0), np.empty(0, dtype=np.int64)
     var = np.asarray(var, dtype=float)
     # Round-off can leave a tiny negative variance for constant data.
-    var = np.where(var < 0.0, 0.0, var)
+    var = unscale_variance(np.where(var < 0.0, 0.0, var), k, stat.name)
     result = StabilityResult(
         statistic=stat.name,
         taus=stat.tau_factor * ms * tau0,
@@ -179,6 +217,7 @@ def run(
     )
     if raw:
         return result
+    # Noise identification is scale-invariant: it gets the scaled samples.
     return attach(result, given, dtype, alpha=alpha_i, confidence=conf, ci=ci_m,
                   id_factors=_id_factors(stat, ms))
 
@@ -199,6 +238,9 @@ def finish(result: StabilityResult, data: object, data_type: str, *, alpha: obje
 
         return _finish(result, data, data_type, alpha=alpha, confidence=confidence, ci=ci, identified=identified)
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
-    given = as_series(data)
+    # The variance was computed by the caller's kernel: refuse one float64 could not hold.
+    unscale_variance(result.var, 0, result.statistic)
+    # Scale-invariant noise identification on the scaled samples (no overflow at 1e±300).
+    given, _ = scale_to_unit(as_series(data, remove_offset=True))
     return attach(result, given, data_type, alpha=alpha_i, confidence=conf, ci=ci_m,
                   id_factors=None if identified is not None else result.m, identified=identified)

@@ -16,7 +16,10 @@ from .errors import DataError, ParameterError
 
 __all__ = [
     "DataType",
+    "RATE_RANGE",
     "as_series",
+    "scale_to_unit",
+    "unscale_variance",
     "check_rate",
     "check_data_type",
     "frequency_to_phase",
@@ -28,15 +31,40 @@ __all__ = [
 DataType = Literal["freq", "phase"]
 _DATA_TYPES = ("freq", "phase")
 
+#: Accepted sample rates in Hz (far beyond any real sensor or clock). Inside it τ0 = 1/rate,
+#: every τ of a grid (at most N·τ0), τ² and 1/τ² stay far inside float64's normal range, and so
+#: does the phase integrated from frequency data scaled near 1 by the driver (|x| ≤ N·τ0) for
+#: records of up to 1e14 points, even inside float32 (≤ 3.4e38), which the total-deviation
+#: kernels use to round a slope.
+RATE_RANGE = (1e-24, 1e24)
 
-def as_series(data: object, name: str = "data") -> np.ndarray:
+#: Largest integer magnitude that converts to float64 exactly.
+_EXACT_INT = 2**53
+
+
+def as_series(data: object, name: str = "data", *, remove_offset: bool = False) -> np.ndarray:
     """Return ``data`` as a finite, 1-D float64 array (a copy is made when needed).
+
+    Parameters
+    ----------
+    data : array_like
+        The samples. A numpy masked array is accepted only when nothing is masked.
+    name : str
+        How messages call the data.
+    remove_offset : bool
+        For the statistics that ignore a constant added to the data: integer data
+        beyond ±2**53 (Unix-epoch nanoseconds, say) are returned as their exact
+        difference from the first value, correctly rounded to float64, instead of
+        being rounded value by value (which loses every digit below 2**11 and can
+        leave nothing of the noise). Any other data are only cast.
 
     Raises
     ------
     DataError
-        When the data is not numeric, not 1-D, empty or holds NaN/inf.
+        When the data is not numeric, not 1-D, empty, holds NaN/inf or masked values.
     """
+    if isinstance(data, np.ma.MaskedArray):
+        data = _unmasked(data, name)
     try:
         arr = np.asarray(data)
     except Exception:  # ragged lists and the like
@@ -54,6 +82,8 @@ def as_series(data: object, name: str = "data") -> np.ndarray:
             raise DataError(f"{name} must be 1-D, got shape {arr.shape}")
     if arr.size == 0:
         raise DataError(f"{name} is empty")
+    if remove_offset and _beyond_exact_float(arr):
+        return _exact_offset_free(arr)
     arr = np.asarray(arr, dtype=np.float64)
     finite = np.isfinite(arr)
     if not finite.all():
@@ -66,8 +96,93 @@ def as_series(data: object, name: str = "data") -> np.ndarray:
     return arr
 
 
+def _unmasked(data: np.ma.MaskedArray, name: str) -> np.ndarray:
+    """The data of a masked array in which nothing is masked; masked values are refused."""
+    mask = np.ma.getmaskarray(data)
+    if mask.any():
+        first = int(np.flatnonzero(mask.ravel())[0])
+        raise DataError(
+            f"{name} is a masked array with {int(mask.sum())} masked value(s) (first at flat index {first});"
+            " gaps are not supported: remove or fill them first (numpy.ma.compressed or .filled)"
+        )
+    return np.ma.getdata(data)
+
+
+def _beyond_exact_float(arr: np.ndarray) -> bool:
+    """Integer data holding a value that float64 cannot represent exactly."""
+    if not np.issubdtype(arr.dtype, np.integer):
+        return False
+    return int(arr.max()) > _EXACT_INT or int(arr.min()) < -_EXACT_INT
+
+
+def _exact_offset_free(arr: np.ndarray) -> np.ndarray:
+    """``arr − arr[0]`` of 1-D integer data, each value correctly rounded to float64.
+
+    The values are mapped order-preserving onto uint64 (signed ones by flipping the
+    sign bit, i.e. adding 2**63) and split into 32-bit halves, u = h·2**32 + l, so
+    ``u − u0 = (h − h0)·2**32 + (l − l0)``: both differences are exact in int64, the
+    product by 2**32 is exact in float64, and the one addition rounds once. Works
+    for any range, even one spanning the whole of int64 or uint64.
+    """
+    if np.issubdtype(arr.dtype, np.signedinteger):
+        u = arr.astype(np.int64).view(np.uint64) ^ np.uint64(1 << 63)
+    else:
+        u = arr.astype(np.uint64)
+    hi = (u >> np.uint64(32)).astype(np.int64)
+    lo = (u & np.uint64(0xFFFFFFFF)).astype(np.int64)
+    return np.ldexp((hi - hi[0]).astype(np.float64), 32) + (lo - lo[0]).astype(np.float64)
+
+
+def scale_to_unit(v: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(v·2**-k, k)`` with the largest ``|v·2**-k|`` in [0.5, 1) (``k = 0`` for all zeros).
+
+    Every statistic is homogeneous of degree two in the data, var(c·x) = c²·var(x),
+    so the kernels run on the scaled series and :func:`unscale_variance` multiplies
+    by 4**k afterwards. A power of two changes no digit (``numpy.ldexp`` is exact for
+    normal and subnormal values alike), so the scaled series holds exactly the
+    user's numbers, and no square or sum of squares of data near 1e±300 can
+    overflow or underflow on the way.
+    """
+    peak = float(np.max(np.abs(v))) if v.size else 0.0
+    if peak == 0.0:
+        return v, 0
+    k = math.frexp(peak)[1]
+    return np.ldexp(v, -k), k
+
+
+def unscale_variance(var: np.ndarray, k: int, name: str) -> np.ndarray:
+    """``var·4**k`` (exact), refusing a variance that float64 cannot hold.
+
+    Raises
+    ------
+    DataError
+        When a non-zero variance would overflow to inf or fall below the smallest
+        normal float64 (≈ 2.2e-308, where it would lose digits or become 0).
+    """
+    var = np.asarray(var, dtype=np.float64)
+    with np.errstate(over="ignore", under="ignore"):  # checked just below
+        out = np.ldexp(var, 2 * k)
+    tiny = np.finfo(np.float64).tiny
+    bad = (var != 0.0) & ~(np.isfinite(out) & (np.abs(out) >= tiny))
+    if bad.any():
+        v = float(var[np.flatnonzero(bad)[0]])
+        exponent = math.log10(abs(v)) + 2 * k * math.log10(2.0) if v != 0.0 and math.isfinite(v) else float("nan")
+        raise DataError(
+            f"{name}: the variance of these data (about 1e{exponent:+.0f}) is outside float64's range"
+            " (1e-308 … 1e+308); rescale the data (another unit) so that the deviation lies within"
+            " about 1e-154 … 1e+154"
+        )
+    return out
+
+
 def check_rate(rate: object) -> float:
-    """Return the sample rate as a positive finite float, or raise ParameterError."""
+    """Return the sample rate as a positive finite float within :data:`RATE_RANGE`.
+
+    Raises
+    ------
+    ParameterError
+        For anything else (strings and booleans included).
+    """
     # float() would also parse "2", b"2" and True: none of them is a sample rate.
     if isinstance(rate, (str, bytes, bool, np.bool_)):
         raise ParameterError(f"rate={rate!r} must be a positive number (Hz)")
@@ -77,6 +192,10 @@ def check_rate(rate: object) -> float:
         raise ParameterError(f"rate={rate!r} must be a positive number (Hz)") from None
     if not math.isfinite(value) or value <= 0.0:
         raise ParameterError(f"rate={rate!r} must be a positive finite number (Hz)")
+    low, high = RATE_RANGE
+    if not low <= value <= high:
+        # Beyond it τ² or 1/τ² over the τ grid could overflow or underflow in float64.
+        raise ParameterError(f"rate={rate!r} must be a positive number within {low:g} … {high:g} Hz")
     return value
 
 

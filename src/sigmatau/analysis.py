@@ -464,6 +464,19 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
                            seconds=time.perf_counter() - t0)
 
 
+def _nothing_computed(n_samples: int, channel: ChannelAnalysis) -> str:
+    """One line saying why no statistic could be computed, each distinct reason once."""
+    by_reason: dict[str, list[str]] = {}
+    for stat, reason in channel.skipped.items():
+        # The statistics' own messages often start with their name: group on the rest.
+        tail = reason[len(stat) + 2:] if reason.startswith(f"{stat}: ") else reason
+        by_reason.setdefault(tail, []).append(stat)
+    why = "; ".join(f"{', '.join(stats)}: {tail}" for tail, stats in by_reason.items())
+    if all("at least" in r for r in channel.skipped.values()):
+        return f"too few samples for any statistic ({n_samples} samples; {why})"
+    return f"no statistic could be computed for channel {channel.name!r} ({n_samples} samples): {why}"
+
+
 def analyze_log(
     log: Any,
     *,
@@ -568,8 +581,7 @@ def analyze_log(
             with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="sigmatau") as pool:
                 done = list(pool.map(one, names))
     if not any(c.results for c in done):
-        why = "; ".join(f"{s}: {r}" for s, r in done[0].skipped.items())
-        raise DataError(f"too few samples for any statistic ({len(log)} samples; {why})")
+        raise DataError(_nothing_computed(len(log), done[0]))
     from .imu import ImuWarning
 
     seen: list[str] = []
