@@ -308,3 +308,27 @@ def test_cli_stats_at_1e140_is_the_scaled_answer(csv_at, capsys):
     for row, low, dev, high in zip(rows, expected.ci_low, expected.dev, expected.ci_high):
         got = np.array([float(v) for v in row[4:7]]) / 1e140
         np.testing.assert_allclose(got, [low, dev, high], rtol=5e-5)
+
+
+def test_cli_analyze_at_1e_minus_100_completes(csv_at, tmp_path, capsys):
+    # Before: exit 3 (LinAlgError from the IMU fit). The statistics are the scale-1 answer
+    # × 1e-100; the model is either fitted or skipped with the reason (never a crash).
+    import json
+
+    path, y = csv_at(1e-100)
+    out = tmp_path / "out"
+    code, _, err = _cli(["analyze", path, "--rate", "100", "--no-figures", "--out", out], capsys)
+    assert code == 0, err
+    channel = json.loads((out / "results.json").read_text())["channels"][0]
+    got = channel["statistics"]["oadev"]
+    expected = sigmatau.oadev(y * 1e100, rate=100.0, confidence=got["confidence"])
+    np.testing.assert_allclose(np.array(got["dev"]) * 1e100, expected.dev, rtol=1e-12)
+    np.testing.assert_allclose(np.array(got["ci_high"]) * 1e100, expected.ci_high, rtol=1e-12)
+    assert channel["model"] is not None or channel["model_note"].startswith("IMU model not fitted")
+
+
+def test_nothing_computed_names_each_reason_once(capsys, csv_at):
+    path, _ = csv_at(1e300)
+    code, _, err = _cli(["stats", path, "--rate", "100", "--stat", "oadev,mdev,adev"], capsys)
+    line = assert_one_line_error((code, err), code=1, match=r"no statistic could be computed for channel 'gyro_x'")
+    assert "oadev, mdev, adev: the variance" in line and line.count("outside float64's range") == 1

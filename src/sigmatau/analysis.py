@@ -443,6 +443,10 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
                 model = imu.analyze(x, rate=log.rate, unit=su.name, taus=taus, confidence=confidence)
             except DataError as exc:
                 note = str(exc)
+            except (ArithmeticError, np.linalg.LinAlgError) as exc:
+                # The fit's linear algebra fails on data far from unit scale (an SVD that does
+                # not converge at 1e-100): the statistics stand, the model is skipped with why.
+                note = f"IMU model not fitted: numerical failure in the fit ({type(exc).__name__}: {exc})"
     elif model_wanted:
         note = f"{group} channel: the IMU model applies to gyro and accel channels"
     results: dict[str, StabilityResult] = {}
