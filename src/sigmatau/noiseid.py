@@ -643,8 +643,9 @@ class NoiseIdentification:
     alpha_estimate : numpy.ndarray of float
         Fractional estimate before clipping (NaN where no method applied).
     method : tuple of str
-        ``"lag1"``, ``"b1"``, ``"b1+rn"`` or ``"carried"`` (nothing applied:
-        α of the nearest identified m).
+        ``"lag1"``, ``"b1"``, ``"b1+rn"`` or ``"carried"`` (too few averages
+        for B1, or no method applied: α of the nearest smaller identified m,
+        else of the nearest one).
     family : str
         ``"allan"``, ``"modified"`` or ``"hadamard"``.
     data_type : str
@@ -741,7 +742,7 @@ def identify(
        factor (``method`` "carried").
 
     Rules 2 and 3 are those that reproduce Stable32's Alpha column (checked
-    on 8138 rows of 118 Stable32 tables: octave, decade and all-τ grids of
+    on 8138 rows of 115 Stable32 tables: octave, decade and all-τ grids of
     phase and frequency records from 1001 to 241218 points, 99.6 % agree).
     They also stop α from jumping between neighbouring τ where a handful of
     averages cannot tell noise types apart: with ``N = Nb`` the B1 boundaries
