@@ -332,3 +332,24 @@ def test_nothing_computed_names_each_reason_once(capsys, csv_at):
     code, _, err = _cli(["stats", path, "--rate", "100", "--stat", "oadev,mdev,adev"], capsys)
     line = assert_one_line_error((code, err), code=1, match=r"no statistic could be computed for channel 'gyro_x'")
     assert "oadev, mdev, adev: the variance" in line and line.count("outside float64's range") == 1
+
+
+@pytest.mark.parametrize(("func", "data", "rate", "index"), [
+    ("frequency_to_phase", np.full(10, 1e308), 1.0, 2),            # the running sum overflows
+    ("frequency_to_phase", np.array([1e-300, 2e-300]), 1e20, 1),   # 1e-320: subnormal, digits lost
+    ("phase_to_frequency", np.array([1.7e308, -1.7e308, 1.0]), 1.0, 0),
+    ("phase_to_frequency", np.array([0.0, 1e-300, 3e-300]), 1e-20, 0),
+])
+def test_conversions_refuse_unrepresentable_output(func, data, rate, index):
+    # Before: inf or a subnormal with a RuntimeWarning (an error under this test house).
+    with pytest.raises(DataError) as exc_info:
+        getattr(sigmatau, func)(data, rate=rate)
+    msg = str(exc_info.value)
+    assert "\n" not in msg and msg.startswith(func) and f"index {index}" in msg, msg
+
+
+def test_conversions_keep_negligible_subnormals():
+    # A value 1e-300 below the largest one is lost at double precision anyway: not an error.
+    x = sigmatau.frequency_to_phase([1e-300, 1.0, 2.0], rate=1e20)
+    np.testing.assert_allclose(x[2:], [1e-20, 3e-20], rtol=1e-15)  # τ0 = 1/rate is rounded
+    np.testing.assert_array_equal(sigmatau.phase_to_frequency([0.0, 1.0, 3.0], rate=2.0), [2.0, 4.0])

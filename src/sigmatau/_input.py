@@ -220,27 +220,71 @@ def frequency_to_phase(y: object, *, rate: float = 1.0) -> np.ndarray:
     -------
     numpy.ndarray
         M + 1 phase points.
+
+    Raises
+    ------
+    DataError
+        When a phase value overflows float64 or falls below its normal range
+        (where it would lose digits or become 0).
     """
     y = as_series(y, "y")
     tau0 = 1.0 / check_rate(rate)
     x = np.empty(y.size + 1)
     x[0] = 0.0
-    np.cumsum(y, out=x[1:])
-    x[1:] *= tau0
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # checked below
+        np.cumsum(y, out=x[1:])
+        sums = x[1:].copy()
+        x[1:] *= tau0
+    _check_representable(x, np.concatenate(([0.0], sums)), "frequency_to_phase", "phase")
     return x
 
 
 def phase_to_frequency(x: object, *, rate: float = 1.0) -> np.ndarray:
-    """Differentiate phase into frequency: ``y_i = (x_{i+1} - x_i)·rate`` (N - 1 points)."""
+    """Differentiate phase into frequency: ``y_i = (x_{i+1} - x_i)·rate`` (N - 1 points).
+
+    Raises
+    ------
+    DataError
+        When a frequency value overflows float64 or falls below its normal range.
+    """
     x = as_series(x, "x")
-    return np.diff(x) * check_rate(rate)
+    rate_f = check_rate(rate)
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # checked below
+        d = np.diff(x)
+        y = d * rate_f
+    _check_representable(y, d, "phase_to_frequency", "frequency")
+    return y
+
+
+def _check_representable(out: np.ndarray, source: np.ndarray, func: str, what: str) -> None:
+    """Refuse ``out`` where it is inf/NaN, or where a ``source`` value that matters at double
+    precision (≥ eps·max|source|) became subnormal or 0 (its digits lost)."""
+    info = np.finfo(np.float64)
+    mag = np.abs(source)
+    peak = float(mag.max()) if mag.size else 0.0
+    lost = (mag != 0.0) & (np.abs(out) < info.tiny) & (mag >= info.eps * peak)
+    bad = ~np.isfinite(out) | lost
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise DataError(
+            f"{func}: the {what} at index {i} ({float(out[i])}) is outside float64's range"
+            " (about 2.2e-308 … 1.8e+308); rescale the data (another unit) first"
+        )
 
 
 def to_phase(data: np.ndarray, rate: float, data_type: DataType) -> np.ndarray:
-    """Phase series of already validated data: frequency is integrated, phase passed through."""
+    """Phase series of already validated data: frequency is integrated, phase passed through.
+
+    Unlike :func:`frequency_to_phase` nothing is checked again: the driver hands in data
+    scaled near 1 and a rate within :data:`RATE_RANGE`, so no phase value can overflow.
+    """
     if data_type == "phase":
         return data
-    return frequency_to_phase(data, rate=rate)
+    x = np.empty(data.size + 1)
+    x[0] = 0.0
+    np.cumsum(data, out=x[1:])
+    x[1:] *= 1.0 / rate
+    return x
 
 
 def remove_linear_phase(x: np.ndarray) -> np.ndarray:
