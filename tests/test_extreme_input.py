@@ -353,3 +353,21 @@ def test_conversions_keep_negligible_subnormals():
     x = sigmatau.frequency_to_phase([1e-300, 1.0, 2.0], rate=1e20)
     np.testing.assert_allclose(x[2:], [1e-20, 3e-20], rtol=1e-15)  # τ0 = 1/rate is rounded
     np.testing.assert_array_equal(sigmatau.phase_to_frequency([0.0, 1.0, 3.0], rate=2.0), [2.0, 4.0])
+
+
+def test_prepare_scaled_gives_the_run_answer(series):
+    # The helper for kernels called outside run(): kernel on the scaled phase, then unscale.
+    from sigmatau._driver import prepare, prepare_scaled
+    from sigmatau._input import unscale_variance
+    from sigmatau.theo import THEO1
+
+    ms = np.array([2, 4, 16])
+    for scale in (1e-150, 1.0, 1e150):
+        for data_type in ("freq", "phase"):
+            p = prepare_scaled(THEO1, series * scale, 100.0, data_type)
+            if scale == 1.0:  # the same phase as prepare(), up to the exact power of two
+                np.testing.assert_array_equal(np.ldexp(p.phase, p.exponent),
+                                              prepare(THEO1, series, 100.0, data_type)[0])
+            var, _ = THEO1.compute(p.phase, ms, 1.0 / p.rate)
+            expected = sigmatau.theo1(series * scale, rate=100.0, data_type=data_type, m=ms, ci=None).var
+            np.testing.assert_allclose(unscale_variance(var, p.exponent, "theo1"), expected, rtol=RTOL, atol=0.0)

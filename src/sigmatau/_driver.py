@@ -22,7 +22,7 @@ from .errors import DataError, ParameterError
 from .result import StabilityResult
 from .taus import select_m
 
-__all__ = ["Statistic", "run", "prepare", "finish"]
+__all__ = ["Statistic", "ScaledPhase", "run", "prepare", "prepare_scaled", "finish"]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
 #: averaging factor in ``ms``, from the phase series ``x``.
@@ -140,6 +140,44 @@ def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> t
             " rescale the data (another unit) or change the rate"
         )
     return x, rate_f, dtype
+
+
+@dataclass(frozen=True)
+class ScaledPhase:
+    """Phase of validated data scaled by an exact power of two (:func:`prepare_scaled`).
+
+    Attributes
+    ----------
+    phase : numpy.ndarray
+        The phase (linear trend removed when the statistic ignores it) × 2**-exponent.
+    rate : float
+        Validated sample rate in Hz.
+    data_type : {"freq", "phase"}
+        Kind of the user's data.
+    exponent : int
+        k: a variance computed from ``phase`` is the user's × 4**-k; undo it with
+        :func:`sigmatau._input.unscale_variance` ``(var, k, name)``.
+    """
+
+    phase: np.ndarray
+    rate: float
+    data_type: str
+    exponent: int
+
+
+def prepare_scaled(stat: Statistic, data: object, rate: object, data_type: object) -> ScaledPhase:
+    """Validate the data and return its phase scaled near 1 (see :class:`ScaledPhase`).
+
+    For a statistic whose kernel is called outside :func:`run` (TheoBR, TheoH): the
+    same scaling as :func:`run`, so data at any scale whose variance float64 can hold
+    give the scale-1 answer, while :func:`prepare` refuses a phase beyond 2**±450.
+    Every estimator is homogeneous of degree two, var(c·x) = c²·var(x), and a power
+    of two changes no digit of the data.
+    """
+    if _is_chunked(data):
+        raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
+    series, rate_f, dtype, _, k = _validated(stat, data, rate, data_type)
+    return ScaledPhase(_phase_of(stat, series, rate_f, dtype), rate_f, dtype, k)
 
 
 def run(
