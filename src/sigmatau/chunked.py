@@ -981,7 +981,7 @@ def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int):
     return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
 
 
-def _b1(freq: object, m: int, hadamard: bool, L: int):
+def _b1(freq: object, m: int, hadamard: bool, L: int, n_expected: Optional[int] = None):
     """:func:`sigmatau.noiseid.b1_noise_id` from streamed block means of the frequency series."""
     from .noiseid import InsufficientDataError, _b1_classify, _b1_obs
 
@@ -995,14 +995,14 @@ def _b1(freq: object, m: int, hadamard: bool, L: int):
     ratio, nb = obs(freq)
     if nb < 3:
         raise InsufficientDataError(f"B1 noise identification needs at least 3 averages at m={m}, got {nb}")
-    mu, mu_hat = _b1_classify(ratio, nb)
+    mu, mu_hat = _b1_classify(ratio, nb, n_expected)
     if hadamard and mu >= 1:
         try:
             ratio2, nb2 = obs(_Diff(freq))
         except DataError:
             nb2 = 0
         if nb2 >= 3:
-            mu2, mu2_hat = _b1_classify(ratio2, nb2)
+            mu2, mu2_hat = _b1_classify(ratio2, nb2, n_expected)
             mu = min(max(mu2 + 2, 1), 3)
             mu_hat = min(max(mu2_hat + 2.0, 1.0), 3.0)
     alpha = 1 if mu == -2 else -mu - 1
@@ -1025,7 +1025,8 @@ def _rn(src: ChunkedSeries, m: int, dtype: str) -> float:
     return float(mv / av)
 
 
-def _identify(src: ChunkedSeries, ms: np.ndarray, dtype: str, family: str) -> tuple[np.ndarray, np.ndarray]:
+def _identify(src: ChunkedSeries, ms: np.ndarray, dtype: str, family: str,
+              n_terms: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
     """``(alpha, alpha_estimate)`` per factor, following :func:`sigmatau.noiseid.identify`."""
     from . import noiseid
 
@@ -1038,6 +1039,8 @@ def _identify(src: ChunkedSeries, ms: np.ndarray, dtype: str, family: str) -> tu
     alpha = np.zeros(len(m_list), dtype=np.int64)
     est = np.full(len(m_list), np.nan)
     method: list[str] = []
+    n_freq = src.n - 1 if dtype == "phase" else src.n
+    min_averages = noiseid.b1_min_averages(family)
     for i, m in enumerate(m_list):
         if src.n // m >= noiseid.LAG1_MIN_POINTS:
             try:
@@ -1047,13 +1050,17 @@ def _identify(src: ChunkedSeries, ms: np.ndarray, dtype: str, family: str) -> tu
             else:
                 method.append("lag1")
                 continue
+        if n_freq // m < min_averages:
+            method.append("carried")
+            continue
         try:
-            a, e, ambiguous = _b1(freq, m, fam == "hadamard", L)
+            a, e, ambiguous = _b1(freq, m, fam == "hadamard", L,
+                                  None if n_terms is None else int(n_terms[i]))
         except DataError:
             method.append("carried")
             continue
         alpha[i], est[i] = a, e
-        if ambiguous and fam == "modified":
+        if ambiguous:
             try:
                 rn = _rn(src, m, dtype)
             except DataError:
@@ -1071,8 +1078,12 @@ def _identify(src: ChunkedSeries, ms: np.ndarray, dtype: str, family: str) -> tu
                 raise noiseid.InsufficientDataError(
                     f"no averaging factor in ms leaves enough data ({src.n} points) for any method"
                 )
-            nearest = min(done, key=lambda j: (abs(math.log(m_list[j] / m_list[i])), -m_list[j]))
-            alpha[i] = alpha[nearest]
+            below = [j for j in done if m_list[j] < m_list[i]]
+            if below:
+                source = max(below, key=lambda j: m_list[j])
+            else:
+                source = min(done, key=lambda j: (abs(math.log(m_list[j] / m_list[i])), -m_list[j]))
+            alpha[i] = alpha[source]
     return np.clip(alpha, lo, hi).astype(float), est
 
 
@@ -1086,7 +1097,8 @@ def _attach(result: StabilityResult, src: ChunkedSeries, data_type: str, *, alph
                       id_factors=id_factors, identified=identified)
     factors = result.m if id_factors is None else id_factors
     try:
-        ident = _identify(src, factors, data_type, result.statistic)
+        same = np.array_equal(factors, result.m)
+        ident = _identify(src, factors, data_type, result.statistic, n_terms=result.n if same else None)
     except DataError as exc:
         nan = np.full(len(result), np.nan)
         out = attach(result, np.empty(0), data_type, alpha=None, confidence=confidence, ci=ci, identified=(nan, nan))
