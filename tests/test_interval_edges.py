@@ -65,6 +65,10 @@ def test_theo1_single_sided_rows_are_valid_upper_bounds():
     assert np.all(edf < 1.0)
     assert np.all(low == 0.0) and np.all(np.isfinite(high))
     assert all("single-sided upper bound" in text for row in reason for text in row)
+    for row_edf, row_reason in zip(edf, reason):  # the number shown is below 1 ("edf 1 < 1" was)
+        for nu, text in zip(row_edf, row_reason):
+            shown = float(text.split()[1])
+            assert shown < 1.0 and abs(shown - nu) <= 0.005 * nu
     coverage = np.mean(truth <= high, axis=0)
     tol = 3.0 * np.sqrt(ONE_SIGMA * (1.0 - ONE_SIGMA) / runs)
     assert np.all(coverage >= ONE_SIGMA - tol), f"{coverage=}"

@@ -162,7 +162,7 @@ def attach(
             lo, hi = deviation_interval(result.dev[one], nu[one], confidence, sided="upper")
             low[one], high[one] = lo, hi
             for i in np.flatnonzero(one):
-                edf_reasons[i] = f"edf {nu[i]:.2g} < {SINGLE_SIDED_EDF:g}: single-sided upper bound"
+                edf_reasons[i] = f"edf {_below(nu[i], SINGLE_SIDED_EDF)} < {SINGLE_SIDED_EDF:g}: single-sided upper bound"
     return dataclasses.replace(
         result,
         alpha=a,
@@ -173,3 +173,13 @@ def attach(
         confidence=confidence,
         ci_reason=tuple(edf_reasons),
     )
+
+
+def _below(value: float, limit: float) -> str:
+    """``value`` with enough digits to show it is below ``limit`` (0.998 printed as "1" read
+    "edf 1 < 1")."""
+    for digits in range(3, 8):
+        text = f"{value:.{digits}g}"
+        if float(text) < limit:
+            return text
+    return repr(float(value))
