@@ -17,7 +17,15 @@ and the other :class:`~sigmatau.errors.DataError` cases, a
 :class:`~sigmatau.errors.ParameterError` for a bad argument or a column, topic or
 dataset that does not exist (listing those that do), and
 :class:`MissingDependencyError` naming the extra to install. The input is only
-ever read.
+ever read, and read once: a pipe, FIFO or ``/dev/stdin`` works for text logs.
+
+Limits against hostile files: a gyro or accel unit the file states but sigmatau
+does not know is refused (declare the unit to override it); lines longer than
+:data:`MAX_LINE_CHARS` and more than :data:`MAX_CHANNELS` channels at once are
+refused; sizes declared by ``.npy``/``.npz`` headers, zip directories, HDF5 and
+Parquet are checked against the memory available before anything is allocated.
+Columns the automatic choice leaves out are named in an :class:`InputWarning`
+and in ``Source.unused_columns``.
 
 Examples
 --------
@@ -37,6 +45,7 @@ Examples
 from __future__ import annotations
 
 from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
+from ._limits import MAX_CHANNELS, MAX_LINE_CHARS
 from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
 from ._read import MIN_SAMPLES, detect_format, list_topics, read
 from ._registry import formats
@@ -62,4 +71,6 @@ __all__ = [
     "SI_UNITS",
     "TIME_UNITS",
     "MIN_SAMPLES",
+    "MAX_CHANNELS",
+    "MAX_LINE_CHARS",
 ]

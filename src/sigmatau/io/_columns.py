@@ -7,9 +7,12 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from ..errors import DataError, ParameterError
+from ._errors import option_hint
+from ._limits import MAX_CHANNELS, check_channels
 from ._units import canonical_unit, time_unit_name
 
-__all__ = ["Recognised", "recognise", "time_name", "select", "list_names", "strip_name"]
+__all__ = ["Recognised", "recognise", "time_name", "select", "list_names", "strip_name", "unused_message",
+           "short_name"]
 
 _BRACKET_UNIT = re.compile(r"\s*[\[\(]([^\]\)]*)[\]\)]\s*$")
 _GYRO_PREFIX = (
@@ -45,7 +48,9 @@ def _key(base: str) -> str:
     s = base.lower()
     if s.startswith("field."):  # rostopic echo -p
         s = s[len("field."):]
-    s = re.sub(r"[.\s\-/]+", "_", s)
+    # one separator stands for '_'; runs of them and '/' are left as they are, so
+    # 'a/../../x' or 'gyro__x' match no pattern instead of passing for a channel
+    s = re.sub(r"[.\s\-]", "_", s)
     s = re.sub(r"_rs_s_", "_", s)  # EuRoC/ASL: w_RS_S_x, a_RS_S_x
     return s
 
@@ -115,9 +120,18 @@ def time_name(name: str) -> tuple[int, str | None] | None:
     return priority, unit
 
 
+def short_name(name: str, limit: int = 60) -> str:
+    """A column name quoted for a message, cut to ``limit`` characters (a header field can be huge).
+
+    >>> short_name("gyro_x"), short_name("x" * 100, limit=4)
+    ("'gyro_x'", "'xxxx'… (100 characters)")
+    """
+    return repr(name) if len(name) <= limit else f"{name[:limit]!r}… ({len(name):,} characters)"
+
+
 def list_names(names: Sequence[str], limit: int = 40) -> str:
     """Comma-separated names for a one-line message (long lists are cut)."""
-    shown = ", ".join(repr(n) for n in names[:limit])
+    shown = ", ".join(short_name(n) for n in names[:limit])
     return shown + (f", … {len(names) - limit} more" if len(names) > limit else "")
 
 
@@ -163,6 +177,20 @@ class Selection:
     time_unit: str | None  # unit the name states
     channels: tuple[int, ...]
     skipped: tuple[str, ...]  # numeric columns left out by the automatic choice
+    unused: tuple[tuple[str, str], ...] = ()  # (column, why) of every column the automatic choice left out
+
+
+def unused_message(path: str, unused: Sequence[tuple[str, str]], what: str = "column") -> str:
+    """One line naming every column left out and why, and how to choose columns instead.
+
+    >>> print(unused_message("a.csv", [("gyro_third", "not a recognised channel name")]))  # doctest: +ELLIPSIS
+    a.csv: 1 column not used: 'gyro_third' (not a recognised channel name); choose columns with --columns ...
+    """
+    shown = [f"{short_name(name)} ({why})" for name, why in unused[:40]]
+    more = f", … {len(unused) - 40} more" if len(unused) > 40 else ""
+    plural = "" if len(unused) == 1 else "s"
+    return (f"{path}: {len(unused)} {what}{plural} not used: {', '.join(shown)}{more};"
+            f" choose {what}s with {option_hint('--columns', 'columns=')}")
 
 
 def select(
@@ -202,11 +230,23 @@ def select(
         if found:
             _, time_idx, time_unit = min(found)
 
+    unused: list[tuple[str, str]] = []
     if columns is None:
         cands = [i for i in range(len(names)) if numeric[i] and i != time_idx]
         imu = [i for i in cands if recognise(names[i]).group is not None]
         chosen = imu if imu else cands
         skipped = tuple(names[i] for i in cands if i not in chosen)
+        for i, name in enumerate(names):
+            if i == time_idx or i in chosen:
+                continue
+            if not numeric[i]:
+                why = "not numeric"
+            elif time_column is None and time_name(name) is not None:
+                why = "another time column"
+            else:
+                why = "not a recognised channel name"
+            unused.append((name, why))
+        check_channels(path, len(chosen), what)
     else:
         specs = [columns] if isinstance(columns, (str, int)) else list(columns)  # type: ignore[call-overload]
         if not specs:
@@ -217,13 +257,17 @@ def select(
             if i == time_idx:
                 raise ParameterError(
                     f"{path}: {what} {names[i]!r} is the time column; it cannot also be a channel"
-                    " (pass time_column=False to read it as data)"
+                    f" (to read it as data: {option_hint('--time-column none', 'time_column=False')})"
                 )
             if i in chosen:
                 raise ParameterError(f"{path}: {what} {names[i]!r} is selected twice")
             numeric_or_raise(i)
             chosen.append(i)
         skipped = ()
+        if len(chosen) > MAX_CHANNELS:
+            raise ParameterError(
+                f"{path}: {len(chosen)} {what}s selected; at most {MAX_CHANNELS} channels are read at once"
+            )
     if not chosen:
         if any(numeric):
             raise DataError(
@@ -231,4 +275,4 @@ def select(
                 f"; {what}s are: {list_names(names)}"
             )
         raise DataError(f"{path}: no numeric data; {what}s are: {list_names(names)}")
-    return Selection(time_idx, time_unit, tuple(chosen), skipped)
+    return Selection(time_idx, time_unit, tuple(chosen), skipped, tuple(unused))

@@ -14,6 +14,8 @@ __all__ = [
     "InputWarning",
     "TimingWarning",
     "need",
+    "option_hint",
+    "repr_kw",
 ]
 
 
@@ -46,3 +48,17 @@ def need(module: str, *, extra: str, package: str, what: str) -> ModuleType:
             f"reading {what} needs the optional package {package!r}, which is not installed;"
             f" install it with: pip install 'sigmatau[{extra}]'"
         ) from None
+
+
+def option_hint(cli: str, python: str) -> str:
+    """How to set an option, for a message read on the command line or in Python.
+
+    >>> option_hint("--gaps split", "gaps='split'")
+    "--gaps split (gaps='split' in Python)"
+    """
+    return f"{cli} ({python} in Python)"
+
+
+def repr_kw(name: str, value: object) -> str:
+    """A keyword argument as Python code: ``repr_kw("gaps", "split")`` is ``gaps='split'``."""
+    return f"{name}={value!r}"

@@ -17,7 +17,8 @@ import numpy as np
 
 from ..errors import DataError, ParameterError
 from ._columns import select
-from ._errors import FormatError, need
+from ._errors import FormatError, need, option_hint
+from ._limits import check_allocation
 from ._numpy import RATE_KEYS, split_2d
 from ._progress import Progress
 from ._registry import Options, Table, file_sha256, register
@@ -70,7 +71,8 @@ def _auto(f: Any, display: str) -> Any:
             node = groups[0]
             continue
         raise FormatError(
-            f"{display}: cannot tell which dataset to read; pass dataset= (datasets: {_listing(f)})"
+            f"{display}: cannot tell which dataset to read; choose one with"
+            f" {option_hint('--dataset PATH', 'dataset=')} (datasets: {_listing(f)})"
         )
 
 
@@ -152,6 +154,8 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
                 break
         progress.set_total(n, unit="rows")
         wanted = ([sel.time] if sel.time is not None else []) + list(sel.channels)
+        # the row count is declared: a chunked dataset of 10^11 rows may occupy a few bytes on disk
+        check_allocation(display, 8 * n * len(wanted), f"{len(wanted)} column(s) of {n:,} rows")
         out: dict[int, np.ndarray] = {}
         for j in wanted:
             ds, sub = specs[names[j]]
@@ -178,5 +182,5 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
         time_name=None if sel.time is None else names[sel.time], time_unit=sel.time_unit,
         time_unit_reason=f"from the name {names[sel.time]!r}" if sel.time is not None and sel.time_unit else "",
         units={k: v for k, v in units.items() if k in data}, rate=rate,
-        detail=f"{'dataset' if single else 'group'} {target.name}, {n} rows",
+        detail=f"{'dataset' if single else 'group'} {target.name}, {n} rows", unused=sel.unused,
     )

@@ -185,6 +185,9 @@ class Source:
         Every column (field, dataset member) the file offers.
     topic : str or None
         The ROS topic read.
+    unused_columns : tuple of str
+        Columns (fields, members) of the file that the automatic choice left out,
+        each with the reason: ``"name (not numeric)"`` …; empty when columns were chosen.
     """
 
     path: str
@@ -194,6 +197,7 @@ class Source:
     detail: str = ""
     columns: tuple[str, ...] = ()
     topic: str | None = None
+    unused_columns: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -316,7 +320,8 @@ class SensorLog:
     def to_dict(self) -> dict[str, Any]:
         """Everything but the sample arrays, as plain Python."""
         return {
-            "source": vars(self.source).copy() | {"columns": list(self.source.columns)},
+            "source": vars(self.source).copy() | {"columns": list(self.source.columns),
+                                                  "unused_columns": list(self.source.unused_columns)},
             "rate": self.rate,
             "data_type": self.data_type,
             "n_samples": len(self),

@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import DataError
 from ._columns import select
 from ._errors import FormatError, need
+from ._limits import check_allocation
 from ._numpy import RATE_KEYS
 from ._progress import Progress
 from ._registry import Options, Table, file_sha256, register
@@ -66,6 +67,7 @@ def read_parquet(path: Path, display: str, opts: Options, progress: Progress) ->
     if sel.time is not None and is_time(types[sel.time]):
         time_unit, reason = _ARROW_UNITS[types[sel.time].unit], f"Arrow type {types[sel.time]}"
     wanted = ([sel.time] if sel.time is not None else []) + list(sel.channels)
+    check_allocation(display, 8 * n * len(wanted), f"{len(wanted)} column(s) of {n:,} rows")
     out = {}
     for j in wanted:
         int_time = j == sel.time and (pa.types.is_integer(types[j]) or is_time(types[j]))
@@ -109,5 +111,5 @@ def read_parquet(path: Path, display: str, opts: Options, progress: Progress) ->
         time=None if sel.time is None else out[sel.time][:pos],
         time_name=None if sel.time is None else names[sel.time], time_unit=time_unit,
         time_unit_reason=reason, units=units, rate=rate,
-        detail=f"{pf.metadata.num_row_groups} row group(s), {n} rows",
+        detail=f"{pf.metadata.num_row_groups} row group(s), {n} rows", unused=sel.unused,
     )

@@ -12,13 +12,14 @@ import numpy as np
 from .._input import DataType, check_data_type, check_rate
 from ..errors import DataError, ParameterError, SigmaTauError
 from . import _hdf5, _numpy, _parquet, _ros, _text  # noqa: F401  (they register their readers)
-from ._columns import list_names, recognise
-from ._errors import FormatError, InputNotFoundError, InputWarning, TimingWarning
+from ._columns import list_names, recognise, unused_message
+from ._errors import FormatError, InputNotFoundError, InputWarning, TimingWarning, option_hint
 from ._model import SensorLog, Source, TopicInfo
 from ._progress import Progress
 from ._registry import Options, Table, detect, get
+from ._stream import OnceInput, is_once
 from ._timing import check_times, infer_time_unit, process, untimed
-from ._units import DEFAULT_UNITS, TIME_UNITS, declared_unit, time_unit_name
+from ._units import DEFAULT_UNITS, GROUP_UNITS, TIME_UNITS, canonical_unit, declared_unit, time_unit_name
 
 __all__ = ["read", "list_topics", "detect_format", "MIN_SAMPLES"]
 
@@ -97,7 +98,12 @@ def _options(**kw: object) -> Options:
 def detect_format(path: PathLike) -> str:
     """The format :func:`read` would use for ``path`` ("csv" covers Stable32-style text too)."""
     p, display = _resolve(path)
-    return detect(p, display)[0]
+    once = _open_once(p, display)
+    try:
+        return detect(p, display, head=None if once is None else once.head)[0]
+    finally:
+        if once is not None:
+            once.close()
 
 
 def read(
@@ -206,31 +212,70 @@ def read(
         progress=progress,
     )
     p, display = _resolve(path)
-    if format is None:
-        name, auto = detect(p, display)
-    else:
-        name, auto = format, False
-    spec = get(name)
-    for option, readers in _FORMAT_OPTIONS.items():
-        if getattr(opts, option) is not None and name not in readers:
-            raise ParameterError(
-                f"{option}= applies to {' and '.join(readers)} files only; {display} is read as {name}"
-            )
-    if name in ("rosbag1", "rosbag2") and opts.time_column is not None:
-        raise ParameterError("time_column= does not apply to ROS bags; use stamps='header' or 'bag'")
+    once = _open_once(p, display)
     try:
-        with Progress(None, f"sigmatau: reading {p.name}", enabled=progress) as bar:
-            table = spec.func(p, display, opts, bar, auto=auto) if name == "csv" else spec.func(
-                p, display, opts, bar)
-    except (SigmaTauError, MemoryError, KeyboardInterrupt):
-        raise
-    except OSError as exc:
-        raise FormatError(f"{display}: cannot read: {exc.strerror or exc}") from None
+        table = _read_table(p, display, opts, format, progress, once)
+    finally:
+        if once is not None:
+            once.close()
     messages: list[tuple[str, type[Warning]]] = []
     log = _finish(table, opts, display, messages)
     for text, category in messages:
         _warnings.warn(text, category, stacklevel=2)
     return log
+
+
+def _open_once(p: Path, display: str) -> OnceInput | None:
+    """A pipe, FIFO or device opened once (its head kept for detection); None for a file or directory."""
+    if not is_once(p):
+        return None
+    try:
+        once = OnceInput(p)
+    except OSError as exc:
+        raise FormatError(f"{display}: cannot read: {exc.strerror or exc}") from None
+    if not once.head:
+        once.close()
+        raise DataError(f"{display}: the input is empty")
+    return once
+
+
+def _read_table(p: Path, display: str, opts: Options, format: str | None, progress: bool | None,
+                once: OnceInput | None) -> Table:
+    if format is None:
+        name, auto = detect(p, display, head=None if once is None else once.head)
+    else:
+        name, auto = format, False
+    spec = get(name)
+    for option, readers in _FORMAT_OPTIONS.items():
+        if getattr(opts, option) is not None and name not in readers:
+            flag = f"--{option.replace('_', '-')}"
+            raise ParameterError(
+                f"{option}= ({flag}) applies to {' and '.join(readers)} files only;"
+                f" {display} is read as {name}"
+            )
+    if name in ("rosbag1", "rosbag2") and opts.time_column is not None:
+        raise ParameterError(
+            f"{display}: time_column= does not apply to ROS bags (nor --time-column);"
+            f" use {option_hint('--stamps header|bag', 'stamps=')}"
+        )
+    text_reader = name in ("csv", "stable32")
+    if once is not None and not text_reader:
+        raise FormatError(
+            f"{display}: is a pipe or device, and {name} input is read from a regular file only;"
+            " save it to a file first"
+        )
+    try:
+        with Progress(None, f"sigmatau: reading {p.name}", enabled=progress) as bar:
+            if text_reader:
+                return spec.func(p, display, opts, bar, auto=auto and name == "csv",
+                                 stream=None if once is None else once.stream())
+            return spec.func(p, display, opts, bar)
+    except (SigmaTauError, KeyboardInterrupt):
+        raise
+    except MemoryError:
+        raise DataError(f"{display}: not enough memory to read it") from None
+    except OSError as exc:
+        raise FormatError(f"{display}: cannot read: {exc.strerror or exc}") from None
 
 
 def _names_groups(table: Table) -> tuple[dict[str, str], dict[str, str]]:
@@ -250,6 +295,37 @@ def _names_groups(table: Table) -> tuple[dict[str, str], dict[str, str]]:
     return names, groups
 
 
+def _file_unit(text: str, group: str) -> str:
+    """A unit as the file states it, in sigmatau's spelling when it is a known gyro or accel unit."""
+    if group in GROUP_UNITS:
+        return canonical_unit(text) or text.strip()
+    return text.strip()
+
+
+_EXAMPLE_UNIT = {"gyro": "deg/s", "accel": "g"}
+
+
+def _check_units(units: Mapping[str, str], origin: Mapping[str, str], groups: Mapping[str, tuple[str, ...]],
+                 original: Mapping[str, str], display: str) -> None:
+    """Refuse a gyro or accel unit from the file that sigmatau does not know.
+
+    Taking it for the SI default would scale every result by an unknown factor
+    (``[rpm]``, ``[LSB]``, ``[counts]``); a unit the caller declared overrides it.
+    """
+    for group, known in GROUP_UNITS.items():
+        for name in groups.get(group, ()):
+            unit = units.get(name)
+            if unit is None or unit in known or origin.get(name) == "declared":
+                continue
+            example = _EXAMPLE_UNIT[group]
+            column = original.get(name, name)
+            raise DataError(
+                f"{display}: column {column!r} is in {unit!r}, not a {group} unit sigmatau knows"
+                f" ({', '.join(known)}); convert the samples or declare their unit with"
+                f" {option_hint(f'--{group}-unit {example}', f'units={{{group!r}: {example!r}}}')}"
+            )
+
+
 def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str, type[Warning]]]) -> SensorLog:
     data = table.data
     if not data or table.rows == 0:
@@ -263,7 +339,7 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
                 called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
                 raise DataError(
                     f"{display}: column {called} holds {int(bad.sum())} NaN/inf value(s) (first at sample {i});"
-                    " remove them or pass allow_nan=True"
+                    " remove them from the file (in Python, allow_nan=True keeps them)"
                 )
     channels = {names[o]: v for o, v in data.items()}
     group_members: dict[str, list[str]] = {}
@@ -277,7 +353,7 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
     origin: dict[str, str] = {}
     for o in data:
         if o in table.units and table.units[o]:
-            units[names[o]] = table.units[o]
+            units[names[o]] = _file_unit(table.units[o], groups_of[o])
             origin[names[o]] = table.unit_origin
     if opts.units:
         by_original = {o: names[o] for o in data}
@@ -301,6 +377,7 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
                         f" using the declared {unit}", InputWarning))
                 units[name] = unit
                 origin[name] = "declared"
+    _check_units(units, origin, groups, {names[o]: o for o in data}, display)
     for group, unit in DEFAULT_UNITS.items():
         for name in groups.get(group, ()):
             if name not in units:
@@ -334,11 +411,13 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
         messages.extend((m, TimingWarning) for m in timing_messages)
     else:
         if opts.time_unit is not None:
-            raise ParameterError(f"time_unit={opts.time_unit!r} given but {display} has no time column")
+            raise ParameterError(f"{display}: time_unit={opts.time_unit!r} (--time-unit) given but the file has"
+                                 " no time column")
         if rate is None:
             raise ParameterError(
-                f"{display}: no time column and no rate; give the rate in Hz (rate=, --rate) or the time"
-                f" column (time_column=, --time-column)"
+                f"{display}: no time column and no rate; give the rate in Hz with"
+                f" {option_hint('--rate HZ', 'rate=')} or the time column with"
+                f" {option_hint('--time-column NAME', 'time_column=')}"
                 f" (columns: {list_names(list(table.columns))})"
             )
         report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
@@ -346,10 +425,13 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
     n = report.samples
     if n < MIN_SAMPLES:
         raise DataError(f"{display}: only {n} sample(s); at least {MIN_SAMPLES} are needed")
+    if table.unused:
+        warn_texts.append(unused_message(display, table.unused))
     messages.extend((m, InputWarning) for m in warn_texts)
     source = Source(
         path=display, format=table.format, sha256=table.sha256, size=table.size, detail=table.detail,
         columns=table.columns, topic=table.topic,
+        unused_columns=tuple(f"{name} ({why})" for name, why in table.unused),
     )
     return SensorLog(
         channels=channels,

@@ -63,6 +63,7 @@ class Table:
     detail: str = ""
     topic: str | None = None
     warnings: list[str] = field(default_factory=list)
+    unused: tuple[tuple[str, str], ...] = ()  # (column, why) left out by the automatic choice
 
 
 Reader = Callable[..., Table]
@@ -129,18 +130,20 @@ def _suffix(path: Path) -> str:
     return suffixes[-1] if suffixes else ""
 
 
-def detect(path: Path, display: str) -> tuple[str, bool]:
+def detect(path: Path, display: str, head: bytes | None = None) -> tuple[str, bool]:
     """Format name of an existing path, and whether a text file's flavour is still open.
 
     Content (magic bytes) decides first, then the extension; other files are
-    read as text unless they hold binary bytes.
+    read as text unless they hold binary bytes. ``head``: the first bytes when
+    the caller has read them already (a pipe cannot be opened twice).
     """
     if path.is_dir():
         if (path / "metadata.yaml").is_file():
             return "rosbag2", False
         raise FormatError(f"{display}: is a directory, not a ROS 2 bag (no metadata.yaml in it)")
-    with path.open("rb") as fh:
-        head = fh.read(8192)
+    if head is None:
+        with path.open("rb") as fh:
+            head = fh.read(8192)
     for magic, name in _MAGIC:
         if head.startswith(magic):
             return name, False

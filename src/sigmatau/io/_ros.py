@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ._columns import select
-from ._errors import FormatError, need
+from ._errors import FormatError, need, option_hint
 from ._model import TopicInfo
 from ._progress import Progress
 from ._registry import Options, Table, file_sha256, register
@@ -107,7 +107,8 @@ def _choose_topic(bag: _Bag, wanted: str | None, display: str) -> tuple[str, Any
     if not imu:
         raise ParameterError(f"{display}: no {IMU_TYPE} topic; topics are: {listing}")
     if len(imu) > 1:
-        raise ParameterError(f"{display}: {len(imu)} {IMU_TYPE} topics, pass topic= one of: {', '.join(imu)}")
+        raise ParameterError(f"{display}: {len(imu)} {IMU_TYPE} topics; choose one with"
+                             f" {option_hint('--topic NAME', 'topic=')}: {', '.join(imu)}")
     return imu[0], infos[imu[0]]
 
 

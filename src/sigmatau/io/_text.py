@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import bz2
 import csv
+import functools
 import gzip
 import hashlib
 import io
@@ -35,8 +36,9 @@ from typing import Iterator
 import numpy as np
 
 from ..errors import DataError, ParameterError
-from ._columns import recognise, select, time_name
-from ._errors import FormatError
+from ._columns import recognise, select, strip_name, time_name
+from ._errors import FormatError, option_hint, repr_kw
+from ._limits import MAX_LINE_CHARS, check_allocation
 from ._progress import Progress
 from ._registry import Options, Table, register
 from ._units import canonical_unit, time_unit_name
@@ -52,6 +54,7 @@ CHUNK_ROWS = 1 << 16
 _INT = re.compile(r"^[+-]?\d+$")
 _DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+(?:[eE][+-]?\d+)?$")
 _MJD = (15_000.0, 100_000.0)  # 1900 … 2132
+_DATA_TYPE_HINT = option_hint("--data-type phase|freq", "data_type='phase' or 'freq'")
 
 
 class _HashingReader(io.RawIOBase):
@@ -82,8 +85,9 @@ class _HashingReader(io.RawIOBase):
         super().close()
 
 
-def _open(path: Path) -> tuple[_HashingReader, io.TextIOWrapper, str, io.BufferedReader]:
-    hashing = _HashingReader(path.open("rb"))  # type: ignore[arg-type]
+def _open(path: Path, stream: io.RawIOBase | None = None
+          ) -> tuple[_HashingReader, io.TextIOWrapper, str, io.BufferedReader]:
+    hashing = _HashingReader(path.open("rb") if stream is None else stream)  # type: ignore[arg-type]
     buffered = io.BufferedReader(hashing, buffer_size=1 << 20)
     magic = buffered.peek(6)[:6]
     stream: io.BufferedIOBase
@@ -111,8 +115,36 @@ def _strip_comment(line: str) -> str:
 def _split(line: str, delimiter: str | None) -> list[str]:
     if delimiter is None:
         return line.split()
-    fields = next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
+    if not line:
+        return []
+    if '"' not in line:  # what the csv module would return, without its 131,072-character field limit
+        return [f.strip() for f in line.split(delimiter)]
+    try:
+        fields = next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
+    except csv.Error:  # a quoted field over the csv module's limit: not a number nor a name anyway
+        return [f.strip().strip('"') for f in line.split(delimiter)]
     return [f.strip() for f in fields]
+
+
+def _shown(value: str) -> str:
+    """A field for a one-line message: quoted, at most 40 characters of it."""
+    if not value:
+        return "an empty field"
+    return repr(value) if len(value) <= 40 else repr(value[:40]) + f"… ({len(value):,} characters)"
+
+
+def _lines(text: io.TextIOWrapper) -> Iterator[str]:
+    """Lines of at most MAX_LINE_CHARS characters: a longer line arrives cut and is refused
+    by :func:`_check_lengths` instead of being held whole in memory."""
+    return iter(functools.partial(text.readline, MAX_LINE_CHARS), "")
+
+
+def _check_lengths(lines: list[str], first: int, display: str) -> None:
+    if lines and max(map(len, lines)) >= MAX_LINE_CHARS:
+        k = next(i for i, s in enumerate(lines) if len(s) >= MAX_LINE_CHARS)
+        raise DataError(
+            f"{display}: line {first + k} is longer than {MAX_LINE_CHARS:,} characters; not a table of numbers"
+        )
 
 
 def _is_num(s: str) -> bool:
@@ -137,6 +169,20 @@ def _single_name(line: str) -> bool:
     return len(text.split()) == 1 or recognise(text).group is not None or time_name(text) is not None
 
 
+def _is_units_line(fields: list[str]) -> bool:
+    """Whether a line under the header gives units: no numbers, every field a known unit or
+    bracketed, at least one known or all bracketed (unknown ones are then refused by name,
+    not skipped as a preamble line and replaced by a default unit)."""
+    present = [x for x in fields if x]
+    if not present or any(_is_num(x) for x in present):
+        return False
+    known = [bool(canonical_unit(x.strip("[]()")) or time_unit_name(x.strip("[]()"))) for x in present]
+    bracketed = [x[:1] in "[(" and x[-1:] in "])" for x in present]
+    short = all(len(x) <= 24 and len(x.split()) <= 3 for x in present)
+    return short and (all(known) or all(bracketed) or (any(known) and all(k or len(x.split()) == 1
+                                                                          for k, x in zip(known, present))))
+
+
 def _mostly_numeric(values: list[str]) -> bool:
     good = sum(_is_num(v) for v in values)
     return good > 0 and 2 * good > len(values)
@@ -159,7 +205,8 @@ class _Sniff:
         if not consistent:
             raise FormatError(
                 f"{display}: not a table of numbers: its last lines split into different numbers of"
-                f" fields ({_DELIMITER_NAMES.get(d, repr(d))} delimiter); pass delimiter= if it is one"
+                f" fields ({_DELIMITER_NAMES.get(d, repr(d))} delimiter); if it is a table, give its delimiter"
+                f" with {option_hint('--delimiter', 'delimiter=')}"
             )
         self.ncols = c
         tail = [f for f in tail if len(f) == c]
@@ -204,15 +251,13 @@ class _Sniff:
                 bad = [j for j in range(c) if self.numeric[j] and not _is_num(f[j])]
                 if nums and bad:  # a data line with a damaged value, not a preamble line
                     j = bad[0]
-                    shown = repr(f[j]) if f[j] else "an empty field"
-                    raise DataError(f"{display}: line {n}: {shown} in column {self.names[j]!r} is not a number")
+                    raise DataError(
+                        f"{display}: line {n}: {_shown(f[j])} in column {self.names[j]!r} is not a number")
         self.units_line: dict[str, str] = {}
         after = [(n, s) for n, s in self.preamble if self.header_line and n > self.header_line]
         for _, s in after:
             f = _split(s, d)
-            if len(f) == c and any(f) and all(
-                not x or canonical_unit(x.strip("[]()")) or time_unit_name(x.strip("[]()")) for x in f
-            ):
+            if len(f) == c and _is_units_line(f):
                 self.units_line = {self.names[j]: f[j].strip("[]()") for j in range(c) if f[j]}
         self.skipped = sum(1 for n, _ in self.preamble if n != self.header_line)
         self.text = " ".join(s for _, s in self.comments + self.preamble)
@@ -260,7 +305,8 @@ class _Sniff:
 def _read_head(text: io.TextIOWrapper, display: str) -> list[str]:
     head: list[str] = []
     rows = 0
-    for line in text:
+    for line in _lines(text):
+        _check_lengths([line], len(head) + 1, display)
         head.append(line)
         s = line.strip()
         if s and not s.startswith(_COMMENTS):
@@ -291,33 +337,34 @@ def _diagnose(lines: list[str], first: int, sniff: _Sniff, usecols: list[int], i
             ok = _INT.match(value) if (int_time and pos == 0) else _is_num(value)
             if not ok:
                 what = "an integer" if (int_time and pos == 0) else "a number"
-                shown = repr(value) if value else "an empty field"
-                return DataError(f"{display}: line {n}: {shown} in column {sniff.names[j]!r} is not {what}")
+                return DataError(
+                    f"{display}: line {n}: {_shown(value)} in column {sniff.names[j]!r} is not {what}")
     message = " ".join(str(err).split())
     return DataError(f"{display}: cannot parse lines {first}–{first + len(lines) - 1}: {message}")
 
 
-def _load(path: Path, display: str, opts: Options, progress: Progress, flavour: str | None) -> Table:
+def _load(path: Path, display: str, opts: Options, progress: Progress, flavour: str | None,
+          stream: io.RawIOBase | None = None) -> Table:
     if opts.delimiter is not None and opts.delimiter not in _DELIMITERS and not (
         isinstance(opts.delimiter, str) and len(opts.delimiter) == 1
     ):
         raise ParameterError(f"delimiter={opts.delimiter!r} must be one character (None: detect)")
-    hashing, text, compression, buffered = _open(path)
-    size = path.stat().st_size
+    hashing, text, compression, buffered = _open(path, stream)
+    size = path.stat().st_size if stream is None else None
     progress.set_total(size)
     # a decompressor does not close the file it was given: close both layers
     with buffered, text:
         try:
             head = _read_head(text, display)
             sniff = _Sniff(head, opts.delimiter, display, opts.delimiter is not None)
-            table = _parse(path, display, opts, progress, flavour, hashing, text, head, sniff, compression)
+            table = _parse(path, display, opts, progress, flavour, hashing, text, head, sniff, compression, size)
         except (OSError, EOFError, lzma.LZMAError, zlib.error) as exc:
             raise FormatError(
                 f"{display}: cannot read the {compression or 'text'} data: {' '.join(str(exc).split())}"
             ) from None
         hashing.drain()
     table.sha256 = hashing.sha.hexdigest()
-    table.size = size
+    table.size = hashing.nbytes
     return table
 
 
@@ -348,7 +395,7 @@ def _loadtxt(lines: list[str], delimiter: str | None, comments: str | tuple[str,
 
 def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour: str | None,
            hashing: _HashingReader, text: io.TextIOWrapper, head: list[str], sniff: _Sniff,
-           compression: str) -> Table:
+           compression: str, size: int | None) -> Table:
     names = sniff.names
     numeric_idx = [j for j in range(sniff.ncols) if sniff.numeric[j]]
     imu_named = any(recognise(n).group for n in names)
@@ -363,21 +410,26 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         if len(numeric_idx) not in (1, 2):
             raise FormatError(
                 f"{display}: a Stable32 data file has one value per line, or MJD and value;"
-                f" found {len(numeric_idx)} numeric columns (use format='csv')"
+                f" found {len(numeric_idx)} numeric columns"
+                f" (use {option_hint('--format csv', repr_kw('format', 'csv'))})"
             )
         if opts.columns is not None:
-            raise ParameterError("columns= does not apply to Stable32 data files (one value per line)")
+            raise ParameterError(
+                f"{display}: columns= (--columns) does not apply to Stable32 data files (one value per line)")
         if len(numeric_idx) == 2:
             time_idx, chans, stated_unit = numeric_idx[0], (numeric_idx[1],), "d"
             if opts.time_column is False:
-                raise ParameterError("time_column=False: a two-column Stable32 file has MJD time tags first")
+                raise ParameterError(f"{display}: time_column=False (--time-column none): a two-column Stable32"
+                                     " file has MJD time tags first")
         else:
             time_idx, chans, stated_unit = None, (numeric_idx[0],), None
         skipped: tuple[str, ...] = ()
+        unused: tuple[tuple[str, str], ...] = ()
     else:
         sel = select(names, sniff.numeric, columns=opts.columns, time_column=opts.time_column,
                      path=display, first_bad=sniff.first_bad)
         time_idx, chans, stated_unit, skipped = sel.time, sel.channels, sel.time_unit, sel.skipped
+        unused = sel.unused
         if time_idx is not None and stated_unit is None and names[time_idx] in sniff.units_line:
             stated_unit = time_unit_name(sniff.units_line[names[time_idx]])
 
@@ -393,16 +445,17 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
 
     # Lines from the first data line on: the sniffed ones, then the rest of the file.
     start = sniff.data_line - 1
-    rest: Iterator[str] = itertools.chain(head[start:], text)
+    rest: Iterator[str] = itertools.chain(head[start:], _lines(text))
     data_bytes = sum(len(s) for s in head[start:]) or 1
     data_lines = max(len(head) - start, 1)
-    if compression:
+    if compression or size is None:
         capacity = 1 << 16
     else:
-        capacity = int(path.stat().st_size / (data_bytes / data_lines) * 1.02) + 16
+        capacity = int(size / (data_bytes / data_lines) * 1.02) + 16
     # numpy's loadtxt takes quotes only with a single one-character comment marker
     quoted = any('"' in s for s in head[start:])
     k = len(chans)
+    check_allocation(display, 8 * capacity * (k + 1), f"{k} column(s) of about {capacity:,} rows")
     buf = np.empty((k, capacity))
     tbuf = np.empty(capacity, dtype=np.int64 if int_time else np.float64) if time_idx is not None else None
     n = 0
@@ -411,6 +464,7 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         lines = list(itertools.islice(rest, CHUNK_ROWS))
         if not lines:
             break
+        _check_lengths(lines, line_no, display)
         try:
             arr = _loadtxt(lines, sniff.delimiter, "#", usecols, dtype, quoted, int_time)
         except ValueError as exc:
@@ -423,6 +477,7 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         m = arr.shape[0]
         if n + m > capacity:
             capacity = max(int(capacity * 1.6), n + m)
+            check_allocation(display, 8 * capacity * (k + 1), f"{k} column(s) of {capacity:,} rows read so far")
             grown = np.empty((k, capacity))
             grown[:, :n] = buf[:, :n]
             buf = grown
@@ -454,8 +509,11 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
     units = {}
     for j in chans:
         rec = recognise(names[j])
+        bracket = strip_name(names[j])[1]
         if rec.unit:
             units[names[j]] = rec.unit
+        elif bracket:  # recorded as written: read() refuses a gyro or accel unit it does not know
+            units[names[j]] = bracket
         elif names[j] in sniff.units_line:
             units[names[j]] = canonical_unit(sniff.units_line[names[j]]) or sniff.units_line[names[j]]
 
@@ -476,14 +534,15 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
     table = Table(
         format=flavour, columns=tuple(names), data=data, rows=n, sha256="", size=0,
         time=time, time_name=None if time_idx is None else names[time_idx],
-        time_unit=stated_unit, units=units, detail="; ".join(parts),
+        time_unit=stated_unit, units=units, detail="; ".join(parts), unused=unused,
     )
     if flavour == "stable32":
         dtype_name = opts.data_type or _stable32_type(sniff, path)
         if dtype_name is None:
             raise ParameterError(
                 f"{display}: cannot tell whether this Stable32-style file holds phase or frequency data"
-                " (neither or both words in its header and name); pass data_type='phase' or 'freq'"
+                " (neither or both words in its header and name); give it with"
+                f" {_DATA_TYPE_HINT}"
             )
         (name,) = data
         table.data_type = dtype_name
@@ -504,14 +563,19 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
           description="delimited text: CSV/TSV/semicolon/whitespace, header and comments detected,"
                       " EuRoC imu0/data.csv; gzip/bzip2/xz compressed too",
           options=("delimiter",))
-def read_csv(path: Path, display: str, opts: Options, progress: Progress, *, auto: bool = False) -> Table:
-    """Read delimited text; with ``auto`` a lone value column is read as a Stable32 data file."""
-    return _load(path, display, opts, progress, None if auto else "csv")
+def read_csv(path: Path, display: str, opts: Options, progress: Progress, *, auto: bool = False,
+             stream: io.RawIOBase | None = None) -> Table:
+    """Read delimited text; with ``auto`` a lone value column is read as a Stable32 data file.
+
+    ``stream``: the input already opened (a pipe, read once), else ``path`` is opened.
+    """
+    return _load(path, display, opts, progress, None if auto else "csv", stream)
 
 
 @register("stable32",
           description="Stable32-style data file: header lines, then one value per line (or MJD and value)",
           options=("delimiter",))
-def read_stable32(path: Path, display: str, opts: Options, progress: Progress, *, auto: bool = False) -> Table:
-    """Read a Stable32-style phase or frequency data file."""
-    return _load(path, display, opts, progress, "stable32")
+def read_stable32(path: Path, display: str, opts: Options, progress: Progress, *, auto: bool = False,
+                  stream: io.RawIOBase | None = None) -> Table:
+    """Read a Stable32-style phase or frequency data file (``stream`` as for :func:`read_csv`)."""
+    return _load(path, display, opts, progress, "stable32", stream)

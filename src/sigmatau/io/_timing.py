@@ -22,6 +22,7 @@ from typing import Literal
 import numpy as np
 
 from ..errors import DataError
+from ._errors import option_hint, repr_kw
 from ._model import Gap, TimingReport
 from ._units import TIME_UNITS
 
@@ -88,7 +89,7 @@ def infer_time_unit(t: np.ndarray, *, name: str, stated: str | None, path: str) 
     readings = ", ".join(f"{_fmt(r)} Hz if {u}" for u, r in fits.items()) or "no plausible rate in any unit"
     raise DataError(
         f"{path}: cannot tell the unit of time column {name!r} (median step {_fmt(step)}: {readings});"
-        " pass time_unit= ('s', 'ms', 'us' or 'ns')"
+        f" give it with {option_hint('--time-unit s|ms|us|ns', 'time_unit=')}"
     )
 
 
@@ -131,7 +132,8 @@ def process(
         i = int(back[0]) + 1
         text = f"{n_back} timestamp(s) go backwards (first at {_where(i, raw)}, after {_value(raw[i - 1])})"
         if unsorted == "refuse":
-            raise DataError(f"{path}: {text}; pass unsorted='sort' to sort the samples by time")
+            raise DataError(f"{path}: {text}; to sort the samples by time use"
+                            f" {option_hint('--unsorted sort', repr_kw('unsorted', 'sort'))}")
         order = np.argsort(raw, kind="stable")
         raw = raw[order]
         channels = {k: v[order] for k, v in channels.items()}
@@ -155,7 +157,8 @@ def process(
             f" first at {_where(i, raw)})"
         )
         if duplicates == "refuse":
-            raise DataError(f"{path}: {text}; pass duplicates='drop' to keep the first of each")
+            raise DataError(f"{path}: {text}; to keep the first of each use"
+                            f" {option_hint('--duplicates drop', repr_kw('duplicates', 'drop'))}")
         keep = np.ones(raw.size, dtype=bool)
         keep[same] = False
         raw = raw[keep]
@@ -189,8 +192,9 @@ def process(
     )
     if report.gaps:
         if gaps == "refuse":
-            raise DataError(f"{path}: {_gap_text(report, m)}; pass gaps='split' to analyse the gap-free"
-                            " segments or gaps='ignore' to analyse across the gaps")
+            raise DataError(f"{path}: {_gap_text(report, m)}; to analyse the gap-free segments use"
+                            f" {option_hint('--gaps split', repr_kw('gaps', 'split'))}, to analyse across the"
+                            f" gaps {option_hint('--gaps ignore', repr_kw('gaps', 'ignore'))}")
         verb = "split the log at" if gaps == "split" else "ignored"
         report = replace(report, actions=report.actions + (f"{verb} {len(report.gaps)} gap(s)",))
     return t, channels, report, time_origin
