@@ -511,7 +511,8 @@ def test_declared_default_and_conflicting_units(tmp_path):
         io.read(euroc, rate=1, units={"gyro": "deg/s"})
     with pytest.raises(ParameterError) as e:
         io.read(p, rate=10, units={"gyro": "furlongs"})
-    _check(e, ParameterError, r"units\['gyro'\]='furlongs' is not a gyro unit", "rad/s, mrad/s, deg/s")
+    _check(e, ParameterError, r"units\['gyro'\]='furlongs' \(--gyro-unit furlongs\) is not a gyro unit",
+           "rad/s, mrad/s, deg/s")
     with pytest.raises(ParameterError) as e:
         io.read(p, rate=10, units={"mag": "uT"})
     _check(e, ParameterError, "units key 'mag'", "gyro, accel, temperature", "gyro_x")
@@ -726,7 +727,7 @@ def test_no_time_column_and_no_rate(tmp_path):
     ({"time_unit": "fortnight"}, r"time_unit='fortnight' must be one of"),
     ({"data_type": "rate"}, r"data_type='rate' must be one of"),
     ({"gap_threshold": 1}, r"gap_threshold=1 must be a number > 1"),
-    ({"delimiter": "ab"}, r"delimiter='ab' must be one character"),
+    ({"delimiter": "ab"}, r"delimiter='ab' \(--delimiter\) must be one character"),
     ({"units": ["deg/s"]}, r"units=\['deg/s'\] must map"),
     ({"topic": "/imu"}, r"topic= \(--topic\) applies to rosbag1 and rosbag2 files only; .* is read as csv"),
     ({"dataset": "/x"}, r"dataset= \(--dataset\) applies to hdf5 files only"),

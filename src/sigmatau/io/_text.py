@@ -348,7 +348,7 @@ def _load(path: Path, display: str, opts: Options, progress: Progress, flavour: 
     if opts.delimiter is not None and opts.delimiter not in _DELIMITERS and not (
         isinstance(opts.delimiter, str) and len(opts.delimiter) == 1
     ):
-        raise ParameterError(f"delimiter={opts.delimiter!r} must be one character (None: detect)")
+        raise ParameterError(f"delimiter={opts.delimiter!r} (--delimiter) must be one character (None: detect)")
     hashing, text, compression, buffered = _open(path, stream)
     size = path.stat().st_size if stream is None else None
     progress.set_total(size)

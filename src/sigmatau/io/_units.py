@@ -108,7 +108,9 @@ def declared_unit(group: str, text: object, *, key: str) -> str:
         unit = canonical_unit(text)
         if unit is None or unit not in GROUP_UNITS[group]:
             allowed = ", ".join(GROUP_UNITS[group])
-            raise ParameterError(f"units[{key!r}]={text!r} is not a {group} unit; use one of {allowed}")
+            flag = f"--{key}-unit {text}" if key in GROUP_UNITS else f"--unit {key}={text}"
+            raise ParameterError(
+                f"units[{key!r}]={text!r} ({flag}) is not a {group} unit; use one of {allowed}")
         return unit
     return text.strip()
 
