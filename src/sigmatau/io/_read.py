@@ -96,7 +96,10 @@ def _options(**kw: object) -> Options:
 
 
 def detect_format(path: PathLike) -> str:
-    """The format :func:`read` would use for ``path`` ("csv" covers Stable32-style text too)."""
+    """The format :func:`read` would use for ``path`` ("csv" covers Stable32-style text too).
+
+    A pipe is consumed by this: its first bytes are read to decide.
+    """
     p, display = _resolve(path)
     once = _open_once(p, display)
     try:
@@ -133,6 +136,8 @@ def read(
     ----------
     path : str or path-like
         A file, or a ROS 2 bag directory. The file is only read, never changed.
+        A pipe, FIFO or ``/dev/stdin`` is read once, from its first byte (text
+        formats only; a binary format from a pipe is refused).
     format : str, optional
         Reader name (see :func:`formats`); detected from the content and the
         extension when None. Text files whose only numeric column is one value
@@ -141,7 +146,11 @@ def read(
         Channels by column name or 0-based index (ROS bags: ``gyro_x`` …
         ``accel_z``). Names match exactly, then ignoring case and a unit in
         brackets, then by canonical channel name. None: every numeric column
-        but the time column — only the recognised IMU channels when there are any.
+        but the time column — only the recognised IMU channels when there are any
+        (exact names and patterns such as ``gyro_x``, ``gx``, ``acc.z``,
+        ``w_RS_S_x [rad s^-1]``; ``a/../../x`` is not one). Every column left out
+        is named in an :class:`InputWarning` and in ``Source.unused_columns``. At
+        most :data:`MAX_CHANNELS` (256) channels are read.
     time_column : str, int or False, optional
         The timestamp column. None looks for one by name (t, time, timestamp,
         ``#timestamp [ns]``, ``field.header.stamp``, mjd …); False: none.
@@ -163,7 +172,9 @@ def read(
         (rad/s, mrad/s, deg/s, mdeg/s, deg/h; m/s^2, mm/s^2, g, mg, ug), recorded
         in these ASCII spellings (``°/s``, ``dps``, ``m/s²``, ``µg`` … are accepted).
         Without a declaration, the file's (EuRoC header, ROS message) or the
-        default: gyro rad/s, accel m/s^2 (``unit_origin`` says which).
+        default: gyro rad/s, accel m/s^2 (``unit_origin`` says which). A gyro
+        or accel unit the file states but that is not one of these (``[rpm]``,
+        ``[LSB]``, ``[counts]``) is refused unless a unit is declared here.
     topic : str, optional
         ROS bags: the ``sensor_msgs/msg/Imu`` topic; needed when there are several.
     dataset : str, optional
@@ -197,7 +208,10 @@ def read(
     FormatError
         The file is not readable as its format (unrecognised, corrupt, truncated).
     DataError
-        No numeric data, too few samples, NaN, timing refused by a policy.
+        No numeric data, too few samples, NaN, timing refused by a policy, a
+        gyro or accel unit that is not known, a line longer than
+        :data:`MAX_LINE_CHARS`, more than :data:`MAX_CHANNELS` channels, or
+        declared sizes beyond the memory available (checked before allocating).
     ParameterError
         A bad argument, or a column, topic or dataset that does not exist (the
         message lists the ones that do).
