@@ -230,5 +230,7 @@ def read_npz(path: Path, display: str, opts: Options, progress: Progress) -> Tab
     if ignored:
         detail += f"; not of that length, left out: {', '.join(ignored)}"
     table = _table_from_columns(cols, fmt="npz", display=display, opts=opts, detail=detail, rate=rate)
+    if opts.columns is None:  # chosen columns leave the rest out on purpose
+        table.unused += tuple((member, f"not of the common length {n}") for member in ignored)
     table.sha256, table.size = file_sha256(path)
     return table
