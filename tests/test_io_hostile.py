@@ -559,3 +559,15 @@ def test_no_python_only_hint_left_in_the_readers():
             if re.search(r"\bpass [a-z_]+=", line) and "--" not in line:
                 offenders.append(f"{path.name}:{no}: {line.strip()}")
     assert not offenders, offenders
+
+
+def test_hdf5_member_of_another_length_is_reported(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    p = tmp_path / "m.h5"
+    with h5py.File(p, "w") as f:
+        f["gyro_x"] = np.zeros(100)
+        f["gyro_y"] = np.zeros(100)
+        f["gyro_z"] = np.zeros(99)  # lost without a word before
+    with pytest.warns(InputWarning, match=r"1 column not used: 'gyro_z \(99,\)' \(not of the common length 100\)"):
+        log = io.read(p, rate=10)
+    assert log.names == ("gyro_x", "gyro_y")

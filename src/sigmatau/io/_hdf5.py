@@ -111,8 +111,10 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
         if not lengths:
             raise DataError(f"{display}: no numeric data in {target.name} (datasets: {_listing(f)})")
         n = max(set(lengths), key=lengths.count)
+        left_out: list[tuple[str, str]] = []
         for key, ds in members:
             if ds.ndim not in (1, 2) or ds.shape[0] != n:
+                left_out.append((f"{key} {tuple(ds.shape)}", f"not of the common length {n}"))
                 continue
             unit = _unit_attr(ds)
             if ds.dtype.names:
@@ -182,5 +184,6 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
         time_name=None if sel.time is None else names[sel.time], time_unit=sel.time_unit,
         time_unit_reason=f"from the name {names[sel.time]!r}" if sel.time is not None and sel.time_unit else "",
         units={k: v for k, v in units.items() if k in data}, rate=rate,
-        detail=f"{'dataset' if single else 'group'} {target.name}, {n} rows", unused=sel.unused,
+        detail=f"{'dataset' if single else 'group'} {target.name}, {n} rows",
+        unused=sel.unused + (tuple(left_out) if opts.columns is None else ()),
     )
