@@ -81,6 +81,7 @@ DATA_CASES = [
     ("scalar", 5.0, [r"1-D", r"\(\)"]),
     ("complex", _random(50) + 1j, [r"real", r"complex"]),
     ("complex-zero-imag", _random(50).astype(complex), [r"real", r"complex"]),
+    ("masked", np.ma.masked_array(_random(50), mask=np.arange(50) % 10 == 3), [r"masked", r"5 masked", r"index 3"]),
 ]
 
 
@@ -207,6 +208,9 @@ RATE_CASES = [
     ("numeric-string", "1", r"rate='1'"),
     ("none", None, r"rate=None"),
     ("list", [1.0], r"rate=\[1\.0\]"),
+    # Beyond 1e-24 … 1e24 Hz, τ² or 1/τ² over the grid could leave float64 (issue 11).
+    ("huge", 1e100, r"rate=1e\+100 .*1e-24 … 1e\+24 Hz"),
+    ("tiny", 1e-200, r"rate=1e-200 .*1e-24 … 1e\+24 Hz"),
 ]
 
 
