@@ -571,3 +571,15 @@ def test_hdf5_member_of_another_length_is_reported(tmp_path):
     with pytest.warns(InputWarning, match=r"1 column not used: 'gyro_z \(99,\)' \(not of the common length 100\)"):
         log = io.read(p, rate=10)
     assert log.names == ("gyro_x", "gyro_y")
+
+
+def test_terminal_escapes_in_a_unit_or_column_name_are_not_printed_raw(tmp_path):
+    esc = "\x1b[2J\x1b[31m"
+    text, _ = _table(f"t,gyro_x [{esc}],gyro_y,odd{esc}", n=50)
+    p = _write(tmp_path / "e.csv", text)
+    with pytest.warns(InputWarning) as rec:
+        io.read(p, units={"gyro": "deg/s"})
+    assert rec and all("\x1b" not in str(w.message) for w in rec), [str(w.message) for w in rec]
+    with pytest.raises(DataError) as e:
+        io.read(p)
+    assert "\x1b" not in str(e.value)

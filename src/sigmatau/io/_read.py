@@ -319,6 +319,12 @@ def _file_unit(text: str, group: str) -> str:
 _EXAMPLE_UNIT = {"gyro": "deg/s", "accel": "g"}
 
 
+def _printable(text: str) -> str:
+    """A unit from the file as shown in a message: as is when plain, else quoted and cut
+    (a control character from a file must not reach the terminal)."""
+    return text if text.isprintable() and len(text) <= 40 else repr(text[:40])
+
+
 def _check_units(units: Mapping[str, str], origin: Mapping[str, str], groups: Mapping[str, tuple[str, ...]],
                  original: Mapping[str, str], display: str) -> None:
     """Refuse a gyro or accel unit from the file that sigmatau does not know.
@@ -387,7 +393,8 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
                 unit = declared_unit(group, text, key=key)
                 if name in units and units[name] != unit and origin.get(name) in ("file", "format"):
                     messages.append((
-                        f"{display}: channel {name!r} is in {units[name]} according to the {origin[name]};"
+                        f"{display}: channel {name!r} is in {_printable(units[name])} according to the"
+                        f" {origin[name]};"
                         f" using the declared {unit}", InputWarning))
                 units[name] = unit
                 origin[name] = "declared"
