@@ -371,3 +371,12 @@ def test_prepare_scaled_gives_the_run_answer(series):
             var, _ = THEO1.compute(p.phase, ms, 1.0 / p.rate)
             expected = sigmatau.theo1(series * scale, rate=100.0, data_type=data_type, m=ms, ci=None).var
             np.testing.assert_allclose(unscale_variance(var, p.exponent, "theo1"), expected, rtol=RTOL, atol=0.0)
+
+
+@pytest.mark.parametrize("name", ["oadev", "totdev"])
+def test_chunked_overflow_is_a_data_error(series, name):
+    # sigmatau.chunked streams unscaled data; an overflowed variance was returned as inf.
+    from sigmatau import chunked
+
+    with pytest.raises(DataError, match=rf"^{name}: .*outside float64's range"):
+        _quiet(getattr(sigmatau, name), chunked.from_array(series * 1e170), ci=None)

@@ -210,8 +210,12 @@ def run(
     if _is_chunked(data):
         from .chunked import _run
 
-        return _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
-                    alpha=alpha, confidence=confidence, ci=ci, raw=raw)
+        result = _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m,
+                      points_per_decade=points_per_decade, alpha=alpha, confidence=confidence, ci=ci, raw=raw)
+        # The streamed kernels do not scale the data: an overflowed variance must not reach
+        # the user as inf (an underflow to exactly 0 is not detectable here).
+        unscale_variance(result.var, 0, stat.name)
+        return result
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
     given = series
