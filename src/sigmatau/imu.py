@@ -1018,8 +1018,13 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _readoffs(taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su: SensorUnit,
-              terms: Sequence[str]) -> tuple[dict[str, Parameter], dict[str, Region]]:
+              terms: Sequence[str], rate: float, coef: Optional[np.ndarray] = None,
+              cov: Optional[np.ndarray] = None) -> tuple[dict[str, Parameter], dict[str, Region]]:
+    """Fixed-slope read-offs; with ``coef``/``cov`` (the fit's squared coefficients
+    and their covariance) the neighbouring terms' share is removed from every
+    point of a region before the line is read (see :func:`analyze`, *Read-offs*)."""
     lt, ls = np.log(taus), np.log(dev)
+    design = _design(taus, rate)
     slope, err = _local_slopes(lt, ls, nu)
     params: dict[str, Parameter] = {}
     regions: dict[str, Region] = {}
@@ -1037,30 +1042,63 @@ def _readoffs(taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su
         if best is not None and best[0][0] >= _MIN_SPAN[term] - 1e-9:
             _, a, b = best
             idx = np.arange(a, b + 1)
-            ell = ls[idx] + s0 * (math.log(tr) - lt[idx])
-            # EDF weights, tapered by how far each point's slope is from the nominal:
-            # the shortest τ carry most EDF but are the first to be pulled off the
-            # line by a neighbouring term or the sensor's filter.
+            corrected = coef is not None
+            if corrected:
+                own = _neighbour_share(design[idx], coef, TERMS.index(term))
+                var_i = dev[idx] ** 2
+                net = var_i - own
+                # A point where the neighbours hold more than ¾ of the variance says
+                # little about this term (and nothing when they hold all of it).
+                use = net > 0.25 * var_i
+                if not use.any():
+                    corrected, use = False, np.ones(idx.size, bool)
+            else:
+                use = np.ones(idx.size, bool)
+            idx = idx[use]
             delta = np.minimum(np.abs(slope[idx] - s0), 0.45)
-            w = nu[idx] * np.exp(-((delta / _SLOPE_TAPER) ** 2))
+            if corrected:
+                net, var_i = net[use], var_i[use]
+                gain = var_i / net                  # relative error of the net variance / of the raw one
+                ell = 0.5 * np.log(net) + s0 * (math.log(tr) - lt[idx])
+                w = nu[idx] / gain**2
+            else:
+                gain = np.ones(idx.size)
+                ell = ls[idx] + s0 * (math.log(tr) - lt[idx])
+                # EDF weights, tapered by how far each point's slope is from the nominal:
+                # the shortest τ carry most EDF but are the first to be pulled off the
+                # line by a neighbouring term or the sensor's filter.
+                w = nu[idx] * np.exp(-((delta / _SLOPE_TAPER) ** 2))
             w = w / w.sum()
             level = float(np.sum(w * ell))
             corr = _correlation(taus[idx], np.full(idx.size, _ALPHA[term]))
-            s = 1.0 / np.sqrt(2.0 * nu[idx])
+            s = gain / np.sqrt(2.0 * nu[idx])
             var_ln = float(w @ (corr * np.outer(s, s)) @ w)
+            if corrected and cov is not None:
+                # Uncertainty of the subtracted share: d ell_i / d c_k = −½·A_ik / net_i.
+                jac = -0.5 * design[idx] / net[:, None]
+                jac[:, TERMS.index(term)] = 0.0
+                g = w @ jac
+                var_ln += float(g @ cov @ g)
             nu_eff = 1.0 / (2.0 * var_ln)
             value = math.exp(level) * _READ_FACTOR[term]
             lo, hi = deviation_interval(value, nu_eff, conf)
-            # A point whose slope is off by δ holds a share ≈ 2δ of a term whose slope
-            # differs by ½ and sits |½·ln(1 − 2δ)| off the line in ln σ (above it for a
-            # neighbouring term, below it under a filter): the weighted mean of that
-            # offset widens the interval on both sides.
-            allowance = float(np.sum(w * -0.5 * np.log1p(-2.0 * delta)))
+            if corrected:
+                allowance = 0.0
+                how = ("the fitted neighbouring terms' share subtracted from each point's AVAR (points where it"
+                       " exceeds ¾ left out), weights EDF/(AVAR/net)²")
+            else:
+                # A point whose slope is off by δ holds a share ≈ 2δ of a term whose slope
+                # differs by ½ and sits |½·ln(1 − 2δ)| off the line in ln σ (above it for a
+                # neighbouring term, below it under a filter): the weighted mean of that
+                # offset widens the interval on both sides.
+                allowance = float(np.sum(w * -0.5 * np.log1p(-2.0 * delta)))
+                how = "EDF weights tapered by the departure from the slope"
             lo, hi = lo * math.exp(-allowance), hi * math.exp(allowance)
             rule = (f"smoothed ADEV slope within ±{_SLOPE_TOL:g} of {s0:+g} (standard error ≤ {_SLOPE_ERR_MAX:g})"
-                    f" over {idx.size} τ; EDF-weighted line of slope {s0:+g} read at τ = {tr:.4g} s"
-                    + ("; B = σ/0.6643" if term == "B" else "") + f"; interval: χ² with EDF {nu_eff:.3g},"
-                    f" widened by the departure from the slope that the region shows (×{math.exp(allowance):.4g})")
+                    f" over {b - a + 1} τ; line of slope {s0:+g} read at τ = {tr:.4g} s ({how})"
+                    + ("; B = σ/0.6643" if term == "B" else "") + f"; interval: χ² with EDF {nu_eff:.3g}"
+                    + ("" if corrected else
+                       f", widened by the departure from the slope that the region shows (×{math.exp(allowance):.4g})"))
             params[term] = Parameter(term, value, float(lo), float(hi), unit, True, "read-off", conf, su.kind,
                                      note=rule)
             regions[term] = Region(term, s0, float(taus[a]), float(taus[b]), tr, int(idx.size), True, rule)
@@ -1086,6 +1124,17 @@ def _readoffs(taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su
                                      note=rule)
             regions[term] = Region(term, s0, math.nan, math.nan, tr, 0, False, rule)
     return params, regions
+
+
+def _neighbour_share(design: np.ndarray, coef: np.ndarray, own: int) -> np.ndarray:
+    """AVAR of every term but column ``own`` at the rows of ``design``: Σ_k≠own A_ik c_k.
+
+    A negative 1/τ² coefficient (the sensor's low-pass filter) gives a negative
+    share, which puts back what the filter took.
+    """
+    c = np.array(coef, float)
+    c[own] = 0.0
+    return design @ c
 
 
 #: Exponent of the decay of the correlation with the distance in octaves (see _correlation).
@@ -1127,6 +1176,8 @@ class _Fit(NamedTuple):
     filter_time: float     # τ_f of a significant negative 1/τ² term (s), else 0
     raw_chi2_dof: float    # χ²/dof of the full fit before any discrepancy floor
     needed: tuple          # kept below min_significance because the curve needs them
+    full_coef: np.ndarray  # squared coefficients of the unconstrained fit of every term (5, 0 if excluded)
+    full_cov: np.ndarray   # their covariance (5×5)
 
 
 #: Tail probability of the fit's χ² (scaled-χ² approximation given the
@@ -1190,6 +1241,29 @@ def _fit_once(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     if dof > 0:
         cov = cov * max(1.0, chi2 / dof)
     return h, cov, chi2, dof, dominant
+
+
+def _fit_free(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+              eps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Unconstrained weighted fit of the columns ``cols`` (coefficients of either
+    sign) and the sandwich covariance with the modelled correlation across τ,
+    not scaled by χ²/dof.
+
+    Free of term selection and of the non-negativity bound, ``ĉ`` is unbiased to
+    first order and its covariance applies to every term, including two that
+    share the end of the record (K and R): the basis of the intervals.
+    """
+    sub = design[:, cols]
+    stat = np.sqrt(2.0 / nu)
+    rel = np.sqrt(stat**2 + eps**2)
+    h, sigma, _ = _irls(sub, var, rel, np.ones(len(cols), bool))
+    aw = sub / sigma[:, None]
+    bread = np.linalg.pinv(aw.T @ aw)
+    model_terms = sub * np.abs(h)
+    dominant = np.array([_ALPHA[TERMS[cols[k]]] for k in np.argmax(model_terms, axis=1)])
+    corr = (np.outer(stat, stat) * _correlation(taus, dominant) + np.diag(np.full(taus.size, eps**2)))
+    corr /= np.outer(rel, rel)
+    return h, bread @ (aw.T @ corr @ aw) @ bread
 
 
 def _chi2_expectation(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
@@ -1292,26 +1366,44 @@ def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, t
         h2, cov2, *_ = _fit_once(design, var, nu, taus, trial, eps)
         k = trial.index(c)
         upper[t] = (max(float(h2[k]), 0.0), math.sqrt(max(float(cov2[k, k]), 0.0)))
+    all_cols = [TERMS.index(t) for t in terms]
+    h_all, cov_all = _fit_free(design, var, nu, taus, all_cols, eps)
+    full_coef = np.zeros(5)
+    full_cov = np.zeros((5, 5))
+    full_coef[all_cols] = h_all
+    full_cov[np.ix_(all_cols, all_cols)] = cov_all
     return _Fit(coef, full, tuple(TERMS[c] for c in kept_cols), chi2, dof, upper, dominant, eps, filter_time,
-                raw, tuple(TERMS[c] for c in needed if c in kept_cols))
+                raw, tuple(TERMS[c] for c in needed if c in kept_cols), full_coef, full_cov)
 
 
 def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str], taus: np.ndarray
                     ) -> dict[str, Parameter]:
+    """Parameters of the fit: values from the selected model, intervals and bounds
+    from the unconstrained fit of every term.
+
+    The selected model's own covariance understates the uncertainty of a term
+    that shares its region with a dropped one (K and R at the end of the
+    record): the kept term absorbs the other's share, and the selection keeps
+    it when its realisation is high. The unconstrained fit of all terms has
+    neither effect: with ``ĉ`` and ``σ_c`` from it the interval on ``c = P²``
+    is ``[max(ĉ − zσ_c, 0), ĉ + zσ_c]`` (z for the two-sided level), widened to
+    include the selected model's value, and a dropped term's upper bound is
+    ``√(max(ĉ, 0) + zσ_c)`` (one-sided at ``(1 + p)/2``).
+    """
     z = ndtri(0.5 + conf / 2.0)
     out = {}
     for t in terms:
         j = TERMS.index(t)
         unit = su.term_unit(t)
+        cf, sf = float(fit.full_coef[j]), math.sqrt(max(float(fit.full_cov[j, j]), 0.0))
         if t in fit.kept:
             c, sc = float(fit.coef[j]), math.sqrt(max(float(fit.cov[j, j]), 0.0))
-            nu_c = 2.0 * (c / sc) ** 2 if sc > 0 else math.inf
             value = math.sqrt(c)
-            if math.isfinite(nu_c):
-                lo, hi = deviation_interval(value, nu_c, conf)
-            else:
-                lo = hi = value
-            note = f"interval: χ² with the EDF 2(c/σ_c)² = {nu_c:.3g} of the fitted c = {t}²"
+            lo = math.sqrt(max(cf - z * sf, 0.0))
+            hi = math.sqrt(max(cf + z * sf, 0.0))
+            lo, hi = min(lo, value), max(hi, value)
+            note = (f"interval: ĉ ± {z:.3g}σ_c on c = {t}² from the unconstrained fit of every term"
+                    f" (ĉ = {cf:.4g}, σ_c = {sf:.3g}), widened to include the selected model's value")
             if t in fit.needed:
                 note += (f"; kept although c/σ_c = {c / sc:.2g} is below the significance asked for, because"
                          " the curve is not described without it")
@@ -1323,11 +1415,17 @@ def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str]
                       " which hides any quantisation"))
         else:
             c, sc = fit.upper.get(t, (0.0, math.inf))
-            bound = math.sqrt(c + z * sc) if math.isfinite(sc) else math.inf
+            # The larger of two bounds: the unconstrained fit's, and that of a refit of the
+            # selected terms with this one forced in (non-negative), whose estimate is not
+            # pulled below zero by a neighbour's realisation at the end of the record.
+            free = math.sqrt(max(cf, 0.0) + z * sf) if math.isfinite(sf) else math.inf
+            forced = math.sqrt(c + z * sc) if math.isfinite(sc) else math.inf
+            bound = max(free, forced)
             out[t] = Parameter(
                 t, math.nan, 0.0, bound, unit, False, "fit", conf, su.kind,
                 note=(f"dropped by term selection (not significant over τ = {taus[0]:.3g}–{taus[-1]:.3g} s);"
-                      f" upper bound √(c + {z:.3g}σ_c) from a refit with {t} forced in"))
+                      f" upper bound: the larger of √(max(ĉ, 0) + {z:.3g}σ_c) from the unconstrained fit of"
+                      f" every term and √(c + {z:.3g}σ_c) from a refit with {t} forced in"))
     return out
 
 
@@ -1547,8 +1645,8 @@ def analyze(
     sel = good & np.isfinite(nu) & (nu > 0)
     t_s, d_s, nu_s = taus_a[sel], dev[sel], nu[sel]
 
-    readoff, regions = _readoffs(t_s, d_s, nu_s, conf, su, terms)
     fit = _fit_model(t_s, d_s**2, nu_s, rate_f, terms, min_significance)
+    readoff, regions = _readoffs(t_s, d_s, nu_s, conf, su, terms, rate_f, fit.full_coef, fit.full_cov)
     fitted = _fit_parameters(fit, conf, su, terms, t_s)
 
     primary = {}
