@@ -583,3 +583,16 @@ def test_terminal_escapes_in_a_unit_or_column_name_are_not_printed_raw(tmp_path)
     with pytest.raises(DataError) as e:
         io.read(p)
     assert "\x1b" not in str(e.value)
+
+
+def test_cgroup_budget_does_not_count_the_page_cache(tmp_path):
+    """A container that has just read a large file is not out of memory: its page cache is
+    reclaimable (memory.current counts it; memory.stat 'file' says how much it is)."""
+    from sigmatau.io import _limits
+
+    (tmp_path / "memory.max").write_text("4294967296\n")
+    (tmp_path / "memory.current").write_text("4194304000\n")  # 3.9 GiB, of which 3.5 GiB cache
+    (tmp_path / "memory.stat").write_text("anon 419430400\nfile 3774873600\nkernel 1000\n")
+    assert _limits.cgroup_available(tmp_path) == 4294967296 - 419430400
+    (tmp_path / "memory.max").write_text("max\n")
+    assert _limits.cgroup_available(tmp_path) is None

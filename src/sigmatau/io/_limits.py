@@ -18,7 +18,8 @@ from pathlib import Path
 from ..errors import DataError
 from ._errors import option_hint
 
-__all__ = ["MAX_CHANNELS", "MAX_LINE_CHARS", "memory_budget", "check_allocation", "check_channels", "fmt_bytes"]
+__all__ = ["MAX_CHANNELS", "MAX_LINE_CHARS", "memory_budget", "check_allocation", "check_channels", "fmt_bytes",
+           "cgroup_available"]
 
 #: Most channels read from one log; select others with ``columns=`` (``--columns``).
 MAX_CHANNELS = 256
@@ -53,13 +54,24 @@ def _meminfo_available() -> int | None:
         return None
 
 
-def _cgroup_available() -> int | None:
+def cgroup_available(root: Path = Path("/sys/fs/cgroup")) -> int | None:
+    """Room left under a cgroup v2 memory limit.
+
+    ``memory.current`` counts the page cache, which the kernel reclaims on demand
+    (a container that has just read a 3 GB log is not out of memory): the cache
+    (``file`` in ``memory.stat``) is not counted as used.
+    """
     try:
-        limit = Path("/sys/fs/cgroup/memory.max").read_text().strip()
+        limit = (root / "memory.max").read_text().strip()
         if limit == "max":
             return None
-        used = int(Path("/sys/fs/cgroup/memory.current").read_text().strip())
-        return max(int(limit) - used, 0)
+        used = int((root / "memory.current").read_text().strip())
+        cache = 0
+        for line in (root / "memory.stat").read_text().splitlines():
+            key, _, value = line.partition(" ")
+            if key == "file":
+                cache = int(value)
+        return max(int(limit) - max(used - cache, 0), 0)
     except (OSError, ValueError):
         return None
 
@@ -85,7 +97,7 @@ def _rlimit_available() -> int | None:
 def memory_budget() -> int | None:
     """Bytes this process can still allocate: the least of the free physical memory,
     the cgroup limit and the address-space limit (``ulimit -v``); None when none is known."""
-    known = [b for b in (_meminfo_available(), _cgroup_available(), _rlimit_available()) if b is not None]
+    known = [b for b in (_meminfo_available(), cgroup_available(), _rlimit_available()) if b is not None]
     return min(known) if known else None
 
 
