@@ -674,3 +674,20 @@ def test_unsorted_and_duplicates_policies(policy, tmp_path, capsys):
     code, _, err = _run([base[0], bad, *base[1:], *refuse], capsys)
     assert code == 1
     _one_line_error(err, "bad.csv", warned, keep)
+
+
+def test_kalibr_from_fewer_than_three_axes_says_so(imu_csv, tmp_path, capsys):
+    # Kalibr's values stand for all three axes; a log with two gyro axes must say so (the reader
+    # already warns about the column it left out).
+    rows = Path(imu_csv).read_text().splitlines()
+    header = rows[0].split(",")
+    keep = [i for i, name in enumerate(header) if not name.startswith("gyro_z")]
+    two = _write(tmp_path / "two_gyros.csv", "".join(",".join(r.split(",")[i] for i in keep) + "\n" for r in rows))
+    out = tmp_path / "o"
+    code, stdout, err = _run(["analyze", two, "--out", out, "--stat", "oadev", "--no-figures", "--no-report",
+                              "--quiet"], capsys)
+    assert code == 0, err
+    assert "fewer than three axes: gyroscope from 2 of 3 axes (gyro_x, gyro_y)" in stdout
+    text = (out / "imu.yaml").read_text()
+    assert "fewer than three axes: gyroscope from 2 of 3 axes (gyro_x, gyro_y)" in text
+    assert "accelerometer from" not in text

@@ -223,6 +223,8 @@ class LogAnalysis:
                          f" accelerometer_random_walk {k['accelerometer_random_walk']:.4g}")
             if k["bounds_used"]:
                 lines.append("  upper bounds used (not resolved): " + ", ".join(k["bounds_used"]))
+            if k.get("axes_note"):
+                lines.append(f"  fewer than three axes: {k['axes_note']}")
         elif self.kalibr_note:
             lines.append("")
             lines.append(f"no Kalibr imu.yaml: {self.kalibr_note}")
@@ -605,6 +607,10 @@ def analyze_log(
                                rostopic=rostopic)
         kalibr["axes"] = {"gyroscope": [c.name for c in done if c.group == "gyro" and c.model is not None],
                           "accelerometer": [c.name for c in done if c.group == "accel" and c.model is not None]}
+        # Kalibr's values stand for all three axes: say when fewer went into them.
+        short = [f"{sensor} from {len(axes)} of 3 axes ({', '.join(axes)})"
+                 for sensor, axes in kalibr["axes"].items() if len(axes) < 3]
+        kalibr["axes_note"] = "; ".join(short)
     elif model:
         missing = [g for g, ms in (("gyroscope", gyro), ("accelerometer", accel)) if not ms]
         kalibr_note = f"Kalibr needs both sensors; no {' and no '.join(missing)} model"

@@ -275,7 +275,8 @@ def kalibr_yaml(analysis: Any) -> str:
     head = [
         f"IMU noise model for Kalibr, written by sigmatau {analysis.version}",
         f"input: {src.path} ({src.format}{topic}), sha256 {src.sha256}",
-        f"axes combined: {k['axis_rule']}; inflation factor {k['inflation']:g}",
+        f"axes combined: {k['axis_rule']}; inflation factor {k['inflation']:g}"
+        + (f"; fewer than three axes: {k['axes_note']}" if k.get("axes_note") else ""),
         "continuous-time values (densities), SI units; Kalibr discretises them with update_rate",
     ]
     units = k["units"]
