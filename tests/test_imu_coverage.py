@@ -100,15 +100,17 @@ GRID = {
 }
 
 
-def _statements(config: str, seed: int, methods=("fit", "readoff")):
+def _statements(config: str, seed: int, methods=("fit", "readoff"), kept: list | None = None):
     """(term, method, kind, holds) for every truth term: kind 'interval' for a
     resolved parameter (holds when low ≤ truth ≤ high), 'bound' for an
-    unresolved one (holds when truth ≤ high)."""
+    unresolved one (holds when truth ≤ high). ``kept`` collects the fit's terms."""
     truth = GRID[config]
     y = simulate(duration=GRID_DURATION, rate=GRID_RATE, unit="rad/s", rng=seed, **truth)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ImuWarning)
         m = analyze(y, rate=GRID_RATE, unit="rad/s", checks=False)
+    if kept is not None:
+        kept.append(m.fit_terms)
     out = []
     for t, v in truth.items():
         for method in methods:
@@ -136,14 +138,23 @@ def test_k_and_r_sharing_the_end_fast():
     treated as independent). Accepted: within 3.29 sd of the mean (two-sided
     0.1 %). Before the fix: 65 of 120 held for 60 seeds (54 %, expected ≈ 74 %,
     −3.4 sd at 30 seeds), the kept term came out 1.07–1.29× the truth.
+
+    Both terms are kept when the curve supports both: before, the backward
+    selection kept R in 13 of 40 runs (K absorbing it); with the likelihood-ratio
+    criterion it keeps both in 23 of 30. Asserted: in at least half the runs (a
+    regression guard on the selection, not a statistical bound).
     """
-    stmts = [s for seed in range(30) for s in _statements("N+K+R", 50_000 + seed, methods=("fit",))
+    kept: list = []
+    stmts = [s for seed in range(30) for s in _statements("N+K+R", 50_000 + seed, methods=("fit",), kept=kept)
              if s[0] in ("K", "R")]
     p = np.array([_nominal(kind) for _, _, kind, _ in stmts])
     held = sum(h for *_, h in stmts)
     mean, sd = p.sum(), math.sqrt(np.sum(p * (1 - p)))
     print(f"K, R statements held {held}/{len(stmts)} (expected {mean:.1f} ± {sd:.1f})")
     assert abs(held - mean) <= 3.29 * sd, (held, mean, sd)
+    both = sum("K" in k and "R" in k for k in kept)
+    print(f"K and R both kept in {both}/30 runs")
+    assert both >= 15, both
 
 
 @pytest.mark.slow
