@@ -16,6 +16,7 @@ import os
 import signal
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -61,13 +62,23 @@ def logs(tmp_path_factory) -> Path:
 
 @pytest.fixture(scope="module")
 def client():
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as c:
+    """Not the process default: a default client hid that batch needed one (issue 11 #1)."""
+    with warnings.catch_warnings():  # the scheduler's HTTP port 8787 may be another test run's
+        warnings.filterwarnings("ignore", message="Port .* is already in use")
+        cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                           dashboard_address=None)
+    with cluster, distributed.Client(cluster, set_as_default=False) as c:
         yield c
 
 
 def _index(out: Path) -> list[dict]:
     return [json.loads(line) for line in (out / "index.jsonl").read_text().splitlines()]
+
+
+def _csv_rows(path: Path) -> list[dict]:
+    """The rows of a CSV file read as its consumer would (the file closed: ResourceWarning is an error)."""
+    with open(path, newline="", encoding="utf-8") as fh:
+        return list(csv.DictReader(fh))
 
 
 def _result_dirs(out: Path) -> list[Path]:
@@ -101,7 +112,7 @@ def test_every_log_once_and_the_corrupt_one_reported(fleet, logs):
 
 def test_numbers_equal_single_machine_analysis(fleet):
     """Each log's model in the fleet (record and fleet.csv) is analyze_log's, in SI."""
-    rows = list(csv.DictReader((fleet.out / "fleet.csv").open()))
+    rows = _csv_rows(fleet.out / "fleet.csv")
     assert len(rows) == N_LOGS * 6 * len(TERMS)
     by_key = {(r["path"], r["channel"], r["term"]): r for r in rows}
     for rec in fleet.records:
@@ -143,7 +154,7 @@ def test_outliers_limits_and_report(fleet):
         assert link in page and (fleet.out / link).is_file()
     data = json.loads((fleet.out / "fleet.json").read_text())
     assert data["analysed"] == N_LOGS and data["failed"] == 1 and len(data["records"]) == N_LOGS
-    logs_csv = list(csv.DictReader((fleet.out / "fleet_logs.csv").open()))
+    logs_csv = _csv_rows(fleet.out / "fleet_logs.csv")
     assert len(logs_csv) == N_LOGS + 1
     assert [r["error_type"] for r in logs_csv if r["status"] == "error"] == ["FormatError"]
 
@@ -219,7 +230,8 @@ def test_a_worker_killed_mid_run(logs, tmp_path):
     out = tmp_path / "out"
     killed: list[str] = []
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as c:
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster, set_as_default=False) as c:
         before = set(c.scheduler_info()["workers"])
 
         def kill_one(rec, done, total):
@@ -248,7 +260,7 @@ def test_cli_on_an_existing_scheduler(logs, client, tmp_path, capsys):
     text = capsys.readouterr().out
     assert "10 analysed" in text and "1 failed" in text and "FAIL" in text and "log05" in text
     assert "corrupt.csv: FormatError" in text
-    rows = list(csv.DictReader((out / "fleet_logs.csv").open()))
+    rows = _csv_rows(out / "fleet_logs.csv")
     assert len(rows) == 11
     assert main(["batch", str(logs / "log0*.csv"), "--out", str(out), "--scheduler", client.scheduler.address,
                  "--stat", STATS, "--no-figures", "--quiet"]) == 0

@@ -11,7 +11,9 @@ existing cluster given by its scheduler address. Dask is the optional extra
 Layout of the output directory ``OUT``::
 
     OUT/batch.json            settings of the run (the same on every rerun)
-    OUT/index.jsonl           one line per log as it finishes (append-only journal)
+    OUT/index.jsonl           a line per log as it finishes (append-only journal; one per
+                              path, content hash and outcome, however often rerun)
+    OUT/batch.lock            while a run writes: its host, PID, process start time, boot id
     OUT/logs/<stem>-<sha12>/  the outputs of one log (results.json, CSVs, figures,
                               report.html, imu.yaml) and record.json, its summary
     OUT/fleet.csv             one row per log × channel × term: value, interval, limit, outlier
@@ -55,6 +57,7 @@ import io as _io
 import json
 import math
 import os
+import re
 import shutil
 import socket
 import sys
@@ -68,16 +71,18 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 from . import __version__
 from .analysis import DEFAULT_STATISTICS, IMU_GROUPS, TERMS, _SI_TERM_UNITS, json_ready
 from .confidence import ONE_SIGMA
-from .errors import ParameterError, SigmaTauError
+from .errors import ParameterError, SigmaTauError, SigmaTauWarning
 
 __all__ = [
     "analyze_many",
     "expand_patterns",
     "load_limits",
     "FleetSummary",
+    "check_scheduler_address",
     "ClusterError",
     "OUTLIER_Z",
     "LIMIT_MARGIN",
+    "CONNECT_TIMEOUT",
 ]
 
 #: Robust z-score (0.6745·|x − median|/MAD on log10 values) beyond which a term is an
@@ -87,6 +92,10 @@ OUTLIER_Z = 3.5
 #: Factor applied to a datasheet preset's typical value to make it a limit: datasheets
 #: give typical, not maximum, noise densities, so about half of good parts exceed them.
 LIMIT_MARGIN = 1.5
+
+#: Seconds allowed to reach an existing scheduler (``--scheduler``) before giving up: a
+#: scheduler that answers does so in milliseconds, and a wrong address should not hang.
+CONNECT_TIMEOUT = 10.0
 
 _RECORD = "record.json"
 _INDEX = "index.jsonl"
@@ -398,56 +407,156 @@ def _check_settings(out: Path, settings: dict[str, Any], force: bool) -> str:
 
 
 class _Lock:
-    """``OUT/batch.lock``: one run per output directory at a time (a stale lock is taken over)."""
+    """``OUT/batch.lock``: one run per output directory at a time; a stale lock is taken over.
+
+    The lock is a JSON object naming its holder: ``host``, ``pid``, ``start`` (the
+    process start time in clock ticks after boot, field 22 of ``/proc/<pid>/stat``,
+    proc(5)) and ``boot_id`` (``/proc/sys/kernel/random/boot_id``), the last two
+    None where the system has no ``/proc``. A PID alone cannot tell the holder from
+    an unrelated process that was given the same PID later (after a reboot, or
+    once PIDs wrap); the start time and boot id can. See :func:`_holder_alive`.
+    """
 
     def __init__(self, out: Path) -> None:
         self.path = out / _LOCK
         self.held = False
 
     def __enter__(self) -> "_Lock":
-        me = f"{socket.gethostname()} {os.getpid()}"
-        for _ in range(2):
+        me = json.dumps({"host": socket.gethostname(), "pid": os.getpid(), "start": _start_ticks(os.getpid()),
+                         "boot_id": _boot_id()})
+        for _ in range(3):
             try:
                 fd = os.open(self.path, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
             except FileExistsError:
-                try:
-                    age = time.time() - self.path.stat().st_mtime
-                    text = self.path.read_text()
-                except FileNotFoundError:
-                    continue
-                except OSError:
-                    age, text = 0.0, ""
-                parts = text.split()
-                pid = parts[1] if len(parts) == 2 and parts[1].isdigit() else "?"
-                if pid == "?":  # being written this instant, or unreadable: held unless left for a minute
-                    alive = age < 60
-                elif parts[0] == socket.gethostname():
-                    alive = _pid_alive(int(pid))
-                else:  # another machine's process cannot be checked: its lock holds for a day
-                    alive = age < 86400
-                if alive:
-                    raise ParameterError(f"another sigmatau batch (process {pid}) is writing to"
-                                         f" {str(self.path.parent)!r}; wait for it or use another --out") from None
-                self.path.unlink(missing_ok=True)
+                self._take_over_if_stale()
                 continue
             with os.fdopen(fd, "w") as fh:
                 fh.write(me)
             self.held = True
             return self
-        raise ParameterError(f"cannot lock {str(self.path)!r}")
+        raise ParameterError(f"cannot lock {str(self.path)!r}: another sigmatau batch keeps taking it")
 
     def __exit__(self, *exc: Any) -> None:
         if self.held:
             self.path.unlink(missing_ok=True)
 
+    def _take_over_if_stale(self) -> None:
+        """Remove the lock when its holder is gone; raise ParameterError when it is alive."""
+        try:
+            st = self.path.stat()
+            text = self.path.read_text(encoding="utf-8", errors="replace")
+        except FileNotFoundError:
+            return  # released meanwhile: try again
+        except OSError:
+            st, text = None, ""
+        holder = _parse_lock(text)
+        age = time.time() - st.st_mtime if st is not None else 0.0
+        if _holder_alive(holder, lock_mtime=st.st_mtime if st is not None else None, age=age):
+            who = f"process {holder['pid']}" if holder else "a process"
+            if holder and holder["host"] != socket.gethostname():
+                who += f" on {holder['host']}"
+            raise ParameterError(f"another sigmatau batch ({who}) is writing to {str(self.path.parent)!r}; wait for"
+                                 f" it, use another --out, or delete {str(self.path)!r} if that run is gone")
+        # Stale: move it aside (atomic) and check it is still the one judged stale, not a lock
+        # that another run took over and wrote in between; that one is put back.
+        aside = self.path.with_name(f".{_LOCK}.stale-{uuid.uuid4().hex[:8]}")
+        try:
+            os.rename(self.path, aside)
+        except FileNotFoundError:
+            return
+        try:
+            if aside.read_text(encoding="utf-8", errors="replace") != text:
+                with contextlib.suppress(OSError):
+                    os.link(aside, self.path)  # fails if yet another run holds it now: theirs stands
+        finally:
+            aside.unlink(missing_ok=True)
+
+
+def _parse_lock(text: str) -> Optional[dict[str, Any]]:
+    """The holder named by a lock's text: the JSON object, or the ``host pid`` of earlier versions."""
+    try:
+        data = json.loads(text)
+    except ValueError:
+        parts = text.split()
+        if len(parts) == 2 and parts[1].isdigit():
+            return {"host": parts[0], "pid": int(parts[1]), "start": None, "boot_id": None}
+        return None
+    if isinstance(data, dict) and isinstance(data.get("pid"), int) and isinstance(data.get("host"), str):
+        return {"host": data["host"], "pid": data["pid"],
+                "start": data.get("start") if isinstance(data.get("start"), int) else None,
+                "boot_id": data.get("boot_id") if isinstance(data.get("boot_id"), str) else None}
+    return None
+
+
+def _holder_alive(holder: Optional[Mapping[str, Any]], *, lock_mtime: Optional[float], age: float) -> bool:
+    """Whether the run that wrote a lock may still be running.
+
+    On the same host: not when the boot id differs (rebooted since), nor when the
+    PID is dead, nor when the live PID's start time differs from the one recorded
+    (the PID was reused). A lock without a start time (earlier versions, systems
+    without ``/proc``) is compared with the file's modification time: a process
+    that started after its own lock was written is another process. Where neither
+    can be read, a live PID holds. A lock of another host holds for a day (its
+    process cannot be checked from here); an unreadable lock for a minute (it may
+    be being written this instant).
+    """
+    if holder is None:
+        return age < 60
+    if holder["host"] != socket.gethostname():
+        return age < 86400
+    boot = _boot_id()
+    if holder["boot_id"] and boot and holder["boot_id"] != boot:
+        return False
+    pid = holder["pid"]
+    if not _pid_alive(pid):
+        return False
+    now = _start_ticks(pid)
+    if now is None:
+        return True
+    if holder["start"] is not None:
+        return holder["start"] == now
+    started = _start_epoch(now)
+    return not (started is not None and lock_mtime is not None and started > lock_mtime + 1.0)
+
+
+def _start_ticks(pid: int) -> Optional[int]:
+    """Start time of process ``pid`` in clock ticks after boot (``/proc/<pid>/stat`` field 22); None off Linux."""
+    try:
+        text = Path(f"/proc/{pid}/stat").read_text(encoding="ascii", errors="replace")
+        return int(text[text.rindex(")") + 2:].split()[19])  # the name in (…) may hold spaces
+    except (OSError, ValueError, IndexError):
+        return None
+
+
+def _start_epoch(ticks: int) -> Optional[float]:
+    """A start time in ticks as Unix time (boot time ``btime`` of ``/proc/stat`` + ticks / ``SC_CLK_TCK``)."""
+    try:
+        for line in Path("/proc/stat").read_text(encoding="ascii", errors="replace").splitlines():
+            if line.startswith("btime "):
+                return int(line.split()[1]) + ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, AttributeError):
+        pass
+    return None
+
+
+def _boot_id() -> Optional[str]:
+    try:
+        return Path("/proc/sys/kernel/random/boot_id").read_text(encoding="ascii").strip() or None
+    except OSError:
+        return None
+
 
 def _pid_alive(pid: int) -> bool:
+    if pid <= 0:
+        return False
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
         return False
-    except PermissionError:
+    except PermissionError:  # alive, another user's
         return True
+    except OSError:
+        return False
     return True
 
 
@@ -469,10 +578,31 @@ def _read_index(out: Path) -> dict[str, dict[str, Any]]:
 
 
 class _Journal:
+    """``OUT/index.jsonl``, append-only: at most one line per log path, content hash and outcome, ever.
+
+    A rerun of a log that fails again, or of one found done on a worker, writes nothing new.
+    """
+
     def __init__(self, out: Path) -> None:
+        self.seen: set[tuple[Any, Any, Any]] = set()
+        with contextlib.suppress(FileNotFoundError):
+            for line in (out / _INDEX).read_text(encoding="utf-8").splitlines():
+                try:
+                    e = json.loads(line)
+                except ValueError:  # a line cut short by a crash
+                    continue
+                if isinstance(e, dict):
+                    self.seen.add(self._key(e))
         self.fh = open(out / _INDEX, "a", encoding="utf-8")
 
+    @staticmethod
+    def _key(entry: Mapping[str, Any]) -> tuple[Any, Any, Any]:
+        return (entry.get("path"), entry.get("sha256"), entry.get("status"))
+
     def append(self, rec: Mapping[str, Any], stat: Optional[tuple[int, int]]) -> None:
+        if self._key(rec) in self.seen:
+            return
+        self.seen.add(self._key(rec))
         entry = {"path": rec["path"], "status": rec["status"], "sha256": rec.get("sha256"), "name": rec.get("name"),
                  "size": stat[0] if stat else None, "mtime_ns": stat[1] if stat else None,
                  "reused": bool(rec.get("reused")), "error": rec.get("error"), "time": time.time()}
@@ -555,49 +685,63 @@ def load_limits(spec: Any, *, margin: float = LIMIT_MARGIN) -> dict[str, dict[st
         A part with presets in :data:`sigmatau.imu.PRESETS` (``"lsm6dsl"`` …):
         its typical datasheet figures × ``margin``; or a file — JSON or YAML
         ``{"gyro": {"N": "6 mdps/sqrt(Hz)", "B": [1e-4, "rad/s"]}}``, or CSV
-        with the columns ``group, term, max, unit`` — whose values are the
-        limits as given; or such a mapping. A value without unit is SI.
+        with the columns ``group, term, max, unit`` (UTF-8, a byte-order mark
+        allowed) — whose values are the limits as given; or such a mapping.
+        A value without unit is SI.
     margin : float
         Factor applied to a preset's typical values (default 1.5); not to
-        limits given explicitly.
+        limits given explicitly (a warning says so when another margin is given).
+
+    Raises
+    ------
+    ParameterError
+        An unknown part, a missing, unreadable or malformed file (the message
+        names it and what is wrong), an unknown group, term or unit, a value
+        that is not a positive number, a term given twice, or a margin that is
+        not a positive finite number.
     """
     from .analysis import datasheet_reference
     from .units import convert
 
+    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not (math.isfinite(margin) and margin > 0):
+        raise ParameterError(f"limit margin {margin!r} must be a positive finite number")
     if spec is None:
         return {}
-    if isinstance(margin, bool) or not isinstance(margin, (int, float)) or not margin > 0:
-        raise ParameterError(f"margin={margin!r} must be a positive number")
     raw: Mapping[str, Any]
-    factor, source = 1.0, "given"
+    factor, source, where, part = 1.0, "given", "limits: ", False
     if isinstance(spec, (str, os.PathLike)):
         p = Path(spec)
         if p.is_file():
             raw, source = _limits_file(p), f"file {os.fspath(spec)}"
+            where = f"limits file {str(p)!r}: "
         elif os.fspath(spec).lower().endswith((".json", ".yaml", ".yml", ".csv")):
             raise ParameterError(f"limits file {os.fspath(spec)!r} does not exist")
         else:
             raw = datasheet_reference(os.fspath(spec))
-            factor, source = float(margin), f"datasheet {os.fspath(spec)} typical × {float(margin):g}"
+            factor, source, part = float(margin), f"datasheet {os.fspath(spec)} typical × {float(margin):g}", True
     elif isinstance(spec, Mapping):
         raw = spec
     else:
         raise ParameterError(f"limits={spec!r} must be a part name, a file or a mapping group → term → value")
+    if not part and margin != LIMIT_MARGIN:
+        warnings.warn(f"limit margin {margin:g} not applied: it multiplies a datasheet part's typical values, and"
+                      f" the limits of {'the file' if where != 'limits: ' else 'the mapping'} are used as given",
+                      SigmaTauWarning, stacklevel=2)
     out: dict[str, dict[str, dict[str, Any]]] = {}
     for group, terms in raw.items():
         if group not in IMU_GROUPS:
-            raise ParameterError(f"limits: group {group!r} must be 'gyro' or 'accel'")
+            raise ParameterError(f"{where}group {group!r} must be 'gyro' or 'accel'")
         if not isinstance(terms, Mapping):
-            raise ParameterError(f"limits: {group!r} must map terms to values")
+            raise ParameterError(f"{where}{group!r} must map terms to values, e.g. {{N: '6 mdps/sqrt(Hz)'}}")
         for term, value in terms.items():
             if term not in TERMS:
-                raise ParameterError(f"limits: term {group}.{term} must be one of {', '.join(TERMS)}")
+                raise ParameterError(f"{where}term {group}.{term} must be one of {', '.join(TERMS)}")
             si = _SI_TERM_UNITS[group][term]
-            v, unit = _limit_value(value, f"{group}.{term}", si)
+            v, unit = _limit_value(value, f"{where}{group}.{term}", si)
             try:
                 v_si = float(convert(v, unit, si))
             except SigmaTauError:
-                raise ParameterError(f"limits: {group}.{term} unit {unit!r} is not a unit of {si}") from None
+                raise ParameterError(f"{where}{group}.{term} unit {unit!r} is not a unit of {si}") from None
             out.setdefault(group, {})[term] = {"max": v_si * factor, "unit": si, "source": source,
                                                "given": f"{v:g} {unit}" + (f" × {factor:g}" if factor != 1 else "")}
     return out
@@ -611,37 +755,32 @@ def _limit_value(value: Any, what: str, si: str) -> tuple[float, str]:
         try:
             v = float(num)
         except ValueError:
-            raise ParameterError(f"limits: {what}={value!r} must be 'value unit', e.g. '6 mdps/sqrt(Hz)'") from None
+            raise ParameterError(f"{what}={value!r} must be 'value unit', e.g. '6 mdps/sqrt(Hz)'") from None
         unit = unit.strip() or si
     elif isinstance(value, (list, tuple)) and len(value) == 2:
         try:
             v, unit = float(value[0]), str(value[1])
         except (TypeError, ValueError):
-            raise ParameterError(f"limits: {what}={value!r} must be (value, unit)") from None
+            raise ParameterError(f"{what}={value!r} must be (value, unit)") from None
     else:
-        raise ParameterError(f"limits: {what}={value!r} must be a number, 'value unit' or (value, unit)")
+        raise ParameterError(f"{what}={value!r} must be a number, 'value unit' or (value, unit)")
     if not (math.isfinite(v) and v > 0):
-        raise ParameterError(f"limits: {what}={value!r} must be positive")
+        raise ParameterError(f"{what}={value!r} must be positive")
     return v, unit
 
 
-def _limits_file(p: Path) -> dict[str, dict[str, Any]]:
-    text = p.read_text(encoding="utf-8")
+def _limits_file(p: Path) -> dict[str, Any]:
+    """The mapping group → term → value of a limits file (JSON, YAML or CSV by its suffix)."""
+    name = str(p)
+    try:
+        text = p.read_text(encoding="utf-8-sig")  # -sig: spreadsheets save CSV with a byte-order mark
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"limits file {name!r} is not UTF-8 text (byte {exc.start})") from None
+    except OSError as exc:
+        raise ParameterError(f"limits file {name!r} cannot be read: {exc.strerror or exc}") from None
     suffix = p.suffix.lower()
     if suffix == ".csv":
-        rows = list(csv.DictReader(_io.StringIO(text)))
-        need = {"group", "term", "max"}
-        if not rows or not need <= set(rows[0]):
-            raise ParameterError(f"limits file {str(p)!r}: CSV needs the columns group, term, max (and unit)")
-        data: dict[str, dict[str, Any]] = {}
-        for r in rows:
-            try:
-                v = float(r["max"])
-            except (TypeError, ValueError):
-                raise ParameterError(f"limits file {str(p)!r}: max={r['max']!r} is not a number") from None
-            unit = (r.get("unit") or "").strip()
-            data.setdefault(r["group"].strip(), {})[r["term"].strip()] = (v, unit) if unit else v
-        return data
+        return _limits_csv(text, name)
     if suffix in (".yaml", ".yml"):
         try:
             import yaml
@@ -650,15 +789,60 @@ def _limits_file(p: Path) -> dict[str, dict[str, Any]]:
 
             raise MissingDependencyError("YAML limits need PyYAML; install it with: pip install pyyaml,"
                                          " or give the limits as JSON or CSV") from None
-        data = yaml.safe_load(text)
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            at = f" at line {mark.line + 1}, column {mark.column + 1}" if mark is not None else ""
+            problem = getattr(exc, "problem", None) or type(exc).__name__
+            raise ParameterError(f"limits file {name!r} is not valid YAML{at}: {problem}") from None
     else:
         try:
-            data = json.loads(text)
+            data = json.loads(text, object_pairs_hook=_no_duplicate_keys)
         except ValueError as exc:
-            raise ParameterError(f"limits file {str(p)!r} is not valid JSON: {exc}") from None
+            raise ParameterError(f"limits file {name!r} is not valid JSON: {exc}") from None
     if not isinstance(data, Mapping):
-        raise ParameterError(f"limits file {str(p)!r} must map groups to terms to values")
+        raise ParameterError(f"limits file {name!r} must map groups to terms to values, e.g."
+                             " {gyro: {N: '6 mdps/sqrt(Hz)'}}")
     return dict(data)
+
+
+def _no_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object, refused when a key appears twice (JSON would keep the last silently)."""
+    keys = [k for k, _ in pairs]
+    twice = sorted({k for k in keys if keys.count(k) > 1})
+    if twice:
+        raise ValueError(f"{', '.join(map(repr, twice))} given twice")
+    return dict(pairs)
+
+
+def _limits_csv(text: str, name: str) -> dict[str, Any]:
+    try:
+        rows = list(csv.reader(_io.StringIO(text)))
+    except csv.Error as exc:
+        raise ParameterError(f"limits file {name!r} is not valid CSV: {exc}") from None
+    header = [h.strip().lower() for h in rows[0]] if rows else []
+    if not {"group", "term", "max"} <= set(header):
+        raise ParameterError(f"limits file {name!r}: CSV needs the columns group, term, max (and unit)")
+    col = {h: i for i, h in enumerate(header)}
+    data: dict[str, dict[str, Any]] = {}
+    for number, row in enumerate(rows[1:], start=2):
+        if not any(c.strip() for c in row):
+            continue
+        cells = {h: (row[i].strip() if i < len(row) else "") for h, i in col.items()}
+        if not (cells["group"] and cells["term"] and cells["max"]):
+            raise ParameterError(f"limits file {name!r}: row {number} needs a group, a term and a max")
+        try:
+            v = float(cells["max"])
+        except ValueError:
+            raise ParameterError(f"limits file {name!r}: row {number}: max={cells['max']!r} is not a number") from None
+        terms = data.setdefault(cells["group"], {})
+        if cells["term"] in terms:
+            raise ParameterError(f"limits file {name!r}: row {number}: {cells['group']}.{cells['term']} is given"
+                                 " twice")
+        unit = cells.get("unit", "")
+        terms[cells["term"]] = (v, unit) if unit else v
+    return data
 
 
 # ------------------------------------------------------------------------- fleet
@@ -825,20 +1009,16 @@ def _annotate(records: list[dict], rows: list[dict], limits: Mapping[str, Any]) 
             rec["verdict"] = ""
 
 
-def _g(v: Any) -> str:
-    if v is None or isinstance(v, bool):
-        return "" if v is None else str(v)
-    if isinstance(v, float):
-        return repr(v) if math.isfinite(v) else ""
-    return str(v)
-
-
 def _csv_text(header: Sequence[str], rows: Sequence[Mapping[str, Any]]) -> str:
+    """CSV text whose cells a spreadsheet never runs as a formula (:func:`sigmatau.outputs.csv_cell`:
+    a log named ``-2+3.csv`` or an error message starting with ``=`` is shown as text)."""
+    from .outputs import csv_cell
+
     buf = _io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(header)
     for r in rows:
-        w.writerow([_g(r.get(h)) for h in header])
+        w.writerow([csv_cell(r.get(h)) for h in header])
     return buf.getvalue()
 
 
@@ -1097,21 +1277,103 @@ def _cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
-def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> tuple[Any, Callable[[], None]]:
+_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx")
+_ADDRESS = re.compile(r"(?:(?P<scheme>[A-Za-z][A-Za-z0-9+.-]*)://)?"
+                      r"(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_](?:[A-Za-z0-9_.-]*[A-Za-z0-9_])?)"
+                      r":(?P<port>[0-9]{1,5})")
+
+
+def check_scheduler_address(address: Any, *, name: str = "scheduler") -> str:
+    """``address`` checked to be a Dask scheduler address, ``[scheme://]host:port``, before any connection.
+
+    Parameters
+    ----------
+    address : str
+        ``tcp://10.0.0.5:8786`` (the scheme may be ``tcp``, ``tls``, ``ws``, ``wss``
+        or ``ucx``; without one, ``tcp``); the host a name, an IPv4 address or a
+        bracketed IPv6 address; the port 1–65535.
+    name : str
+        What to call it in the message (the CLI says ``--scheduler``).
+
+    Returns
+    -------
+    str
+        The address as given.
+
+    Raises
+    ------
+    ParameterError
+        Anything else, named in a one-line message.
+
+    Examples
+    --------
+    >>> check_scheduler_address("tcp://10.0.0.5:8786")
+    'tcp://10.0.0.5:8786'
+    """
+    example = "such as tcp://host:8786"
+    if not isinstance(address, str):
+        raise ParameterError(f"{name} {address!r} is not a scheduler address {example}")
+    m = _ADDRESS.fullmatch(address.strip())
+    if m is None:
+        raise ParameterError(f"{name} {address!r} is not a scheduler address {example} ([scheme://]host:port)")
+    scheme = (m["scheme"] or "tcp").lower()
+    if scheme not in _SCHEMES:
+        raise ParameterError(f"{name} {address!r} is not a scheduler address {example}: scheme {scheme!r} is not"
+                             f" one of {', '.join(_SCHEMES)}")
+    if not 1 <= int(m["port"]) <= 65535:
+        raise ParameterError(f"{name} {address!r} is not a scheduler address {example}: port {m['port']} is not"
+                             " in 1-65535")
+    return address
+
+
+def _probe_scheduler(address: str) -> None:
+    """Fail fast, in one line, when nothing answers at ``address`` (a TCP connection, before any
+    Dask client: a client that fails to connect lingers for tens of seconds at exit)."""
+    m = _ADDRESS.fullmatch(address.strip())
+    if m is None or (m["scheme"] or "tcp").lower() == "ucx":  # UCX is not TCP: left to Dask's own timeout
+        return
+    host = m["host"].strip("[]")
+    try:
+        with socket.create_connection((host, int(m["port"])), timeout=CONNECT_TIMEOUT):
+            pass
+    except socket.gaierror as exc:
+        reason = f"unknown host {host!r} ({exc.strerror or exc})"
+    except (TimeoutError, socket.timeout):
+        reason = "no answer"
+    except OSError as exc:
+        reason = (exc.strerror or str(exc)).lower()
+    else:
+        return
+    raise ClusterError(f"cannot reach the Dask scheduler at {address!r} within {CONNECT_TIMEOUT:g} s: {reason}")
+
+
+def _local_workers(requested: Optional[int], logs: int, cores: int) -> tuple[int, str]:
+    """Worker processes of a local cluster: the request (default the cores), at most the cores and the
+    logs (each task is one log on one single-threaded process); and a note when a request was capped."""
+    n = max(1, min(requested or cores, cores, logs))
+    note = ""
+    if requested is not None and requested > n:
+        note = (f"workers={requested} capped to {n}: {cores} usable core(s), {logs} log(s) to analyse;"
+                " more processes would only compete for them")
+    return n, note
+
+
+def _connect(client: Any, scheduler: Optional[str], workers: int) -> tuple[Any, Callable[[], None]]:
     """The client to use and how to close what was opened here."""
     if client is not None:
         return client, lambda: None
     distributed = _distributed()
     if scheduler is not None:
         try:
-            c = distributed.Client(scheduler, timeout="20s", set_as_default=False)
+            c = distributed.Client(scheduler, timeout=f"{CONNECT_TIMEOUT:g}s", set_as_default=False)
         except (OSError, TimeoutError) as exc:
-            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r}: {_one_line(exc)}") from None
+            raise ClusterError(f"cannot reach the Dask scheduler at {scheduler!r} within {CONNECT_TIMEOUT:g} s:"
+                               f" {_one_line(exc)}") from None
         except (ValueError, TypeError) as exc:
             raise ParameterError(f"--scheduler {scheduler!r} is not a scheduler address such as"
                                  f" tcp://host:8786 ({_one_line(exc)})") from None
         return c, c.close
-    n = workers or _cores()
+    n = workers
     import dask
 
     try:
@@ -1125,8 +1387,8 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
                                                dashboard_address=None)
     except Exception as exc:
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {_one_line(exc)}") from None
-    # Not the process's default client: batch submits through it explicitly, and a default one
-    # would leave dask's global scheduler pointing at a closed cluster afterwards.
+    # Not the process's default client: batch submits and waits through it explicitly, and a
+    # default one would leave dask's global scheduler pointing at a closed cluster afterwards.
     c = distributed.Client(cluster, set_as_default=False)
 
     def close() -> None:
@@ -1134,6 +1396,21 @@ def _connect(client: Any, scheduler: Optional[str], workers: Optional[int]) -> t
         cluster.close()
 
     return c, close
+
+
+def _remove_if_ours_and_empty(out: Path) -> None:
+    """Undo the creation of ``out`` by a run that analysed nothing: remove what it wrote
+    (settings, an empty journal, the lock's directory ``logs`` when empty), then ``out`` if
+    empty. Never anything else."""
+    with contextlib.suppress(OSError):
+        if (out / _INDEX).stat().st_size == 0:
+            (out / _INDEX).unlink()
+    for name in (_SETTINGS,):
+        with contextlib.suppress(OSError):
+            (out / name).unlink()
+    for d in (out / _LOGS, out):
+        with contextlib.suppress(OSError):
+            d.rmdir()  # only when empty
 
 
 def analyze_many(
@@ -1175,10 +1452,14 @@ def analyze_many(
     client : distributed.Client, optional
         A client of the cluster to use (left open).
     scheduler : str, optional
-        Address of an existing scheduler (``"tcp://host:8786"``) to connect to.
+        Address of an existing scheduler (``"tcp://host:8786"``) to connect to;
+        checked by :func:`check_scheduler_address` and reached within
+        :data:`CONNECT_TIMEOUT` seconds before ``out`` is created.
     workers : int, optional
         Without ``client`` and ``scheduler``: a ``LocalCluster`` of this many
-        single-threaded worker processes (default: the usable cores).
+        single-threaded worker processes (default: the usable cores), at most
+        the usable cores and the logs to analyse (a ``SigmaTauWarning`` says
+        so when a request is capped).
     read : mapping, optional
         Keyword arguments of :func:`sigmatau.io.read` (``columns``,
         ``time_unit``, ``rate``, ``units``, ``topic``, ``gaps`` …), the same
@@ -1208,6 +1489,16 @@ def analyze_many(
     -------
     FleetSummary
 
+    Raises
+    ------
+    ParameterError
+        A bad argument, pattern or limits file; ``out`` of other settings; or
+        ``out`` locked by a run that is still alive (a lock left by a run that
+        died, or whose PID now belongs to another process, is taken over).
+    ClusterError
+        The scheduler cannot be reached or the local cluster cannot start;
+        an ``out`` created by this call is then removed again.
+
     Notes
     -----
     Each log is one task ``(hash, read, analyze_log, write_outputs, record)``
@@ -1217,7 +1508,9 @@ def analyze_many(
     hidden name and renamed into place, its ``record.json`` included, so it
     exists only complete; a task finding the directory of its content already
     there returns that record. The client appends every finished record to
-    ``out/index.jsonl`` (fsync) as it arrives, and a rerun skips paths whose
+    ``out/index.jsonl`` (fsync) as it arrives — once per path, content hash
+    and outcome, so a log failing on every rerun stays one line — and a rerun
+    skips paths whose
     size and mtime match a journal entry whose directory exists, without
     submitting them; the others are hashed on the workers and skipped there.
     The fleet summary counts each content once. A worker that dies has its
@@ -1235,6 +1528,8 @@ def analyze_many(
         raise ParameterError("workers= starts a local cluster; it cannot be combined with client or scheduler")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ParameterError(f"workers={workers!r} must be a positive integer")
+    if scheduler is not None:
+        check_scheduler_address(scheduler)
     fmts = [str(f).lower() for f in (figures or ())]
     for f in fmts:
         if f not in FIGURE_FORMATS:
@@ -1251,7 +1546,25 @@ def analyze_many(
     if out_p.is_dir() and any(out_p.iterdir()) and not (out_p / "batch.json").is_file():
         raise ParameterError(f"out {str(out_p)!r} exists, is not empty and is not a sigmatau batch directory"
                              " (no batch.json); choose another --out")
+    if scheduler is not None:
+        _probe_scheduler(scheduler)
+    created = not out_p.exists()
     out_p.mkdir(exist_ok=True)
+    try:
+        return _run_batch(out_p, files, created=created, client=client, scheduler=scheduler, workers=workers,
+                          read_kw=read_kw, analysis_kw=analysis_kw, fmts=fmts, report=report, lim=lim,
+                          outlier_z=outlier_z, fleet_figures=fleet_figures, force=force, progress=progress, t0=t0)
+    except ClusterError:
+        if created:  # nothing was analysed: leave no trace of the attempt
+            _remove_if_ours_and_empty(out_p)
+        raise
+
+
+def _run_batch(out_p: Path, files: list[str], *, created: bool, client: Any, scheduler: Optional[str],
+               workers: Optional[int], read_kw: dict[str, Any], analysis_kw: dict[str, Any], fmts: list[str],
+               report: bool, lim: Mapping[str, Any], outlier_z: float, fleet_figures: bool, force: bool,
+               progress: Any, t0: float) -> FleetSummary:
+    """The body of :func:`analyze_many` once its arguments are checked and ``out_p`` exists."""
     logs_dir = out_p / _LOGS
     logs_dir.mkdir(exist_ok=True)
     settings = json_ready({"version": __version__, "read": read_kw, "analysis": analysis_kw, "figures": fmts,
@@ -1282,10 +1595,14 @@ def analyze_many(
         journal = _Journal(out_p)
         closer: Callable[[], None] = lambda: None
         futures: list[Any] = []
+        local = client is None and scheduler is None
         try:
             if todo:
                 distributed = _distributed()
-                cl, closer = _connect(client, scheduler, workers)
+                n_workers, note = _local_workers(workers, len(todo), _cores())
+                if local and note:
+                    warnings.warn(note, SigmaTauWarning, stacklevel=3)
+                cl, closer = _connect(client, scheduler, n_workers)
                 # Key: the log and settings, plus this run: a key of an interrupted run may still be
                 # being cancelled on the scheduler, and reusing it would hand back its CancelledError.
                 run = uuid.uuid4().hex[:8]
@@ -1298,7 +1615,9 @@ def analyze_many(
                 futures = [cl.submit(_analyse_one, p, str(logs_dir.resolve()), read_kw, analysis_kw, fmts,
                                      bool(report), bool(force), token, key=keys[p], pure=False) for p in todo]
                 path_of = {f.key: p for f, p in zip(futures, todo)}
-                for fut in distributed.as_completed(futures):
+                # Through this client's own event loop: as_completed() would otherwise look for the
+                # process's default client, which batch never makes (and a user need not have).
+                for fut in distributed.as_completed(futures, loop=cl.loop):
                     p = path_of[fut.key]
                     try:
                         rec = fut.result()
@@ -1312,14 +1631,16 @@ def analyze_many(
         finally:
             bar.close()
             journal.close()
-            if futures:
+            pending = [f for f in futures if not f.done()]
+            if pending:
                 with contextlib.suppress(Exception):  # a cluster already gone has nothing left to cancel
-                    cl.cancel([f for f in futures if not f.done()])
+                    cl.cancel(pending)
             closer()
-        for d in logs_dir.glob(".*"):  # leftovers of attempts that died (the lock says we are alone)
-            if not any(tag in d.name for tag in (".staging-", ".partial-", ".old-")):
-                continue
-            shutil.rmtree(d, ignore_errors=True) if d.is_dir() else d.unlink(missing_ok=True)
+            # Leftovers of attempts that died or were cancelled (the lock says no other run writes
+            # here). Also after an interruption, but only once no task of ours can still be writing:
+            # the local cluster is closed; a cancelled task may still run on a cluster of the user's.
+            if local or not pending:
+                _remove_leftovers(logs_dir)
 
         ok: dict[str, dict] = {}
         errors = []
@@ -1337,6 +1658,13 @@ def analyze_many(
                              computed=computed, reused=reused, seconds=time.perf_counter() - t0,
                              figures=fleet_figures)
     return replace(fleet, seconds=time.perf_counter() - t0)
+
+
+def _remove_leftovers(logs_dir: Path) -> None:
+    for d in logs_dir.glob(".*"):
+        if not any(tag in d.name for tag in (".staging-", ".partial-", ".old-")):
+            continue
+        shutil.rmtree(d, ignore_errors=True) if d.is_dir() else d.unlink(missing_ok=True)
 
 
 # --------------------------------------------------------------------------- CLI
@@ -1370,9 +1698,11 @@ def add_cli(subparsers: Any) -> None:
                    help="logs: files, ROS 2 bag directories or glob patterns (expanded by sigmatau; quote them)")
     p.add_argument("--out", required=True, help="output directory (created; reused by a rerun, which resumes)")
     c = p.add_argument_group("cluster").add_mutually_exclusive_group()
-    c.add_argument("--scheduler", metavar="ADDRESS", help="address of an existing Dask scheduler, tcp://host:8786")
+    c.add_argument("--scheduler", metavar="ADDRESS",
+                   help=f"address of an existing Dask scheduler, tcp://host:8786 (reached within"
+                        f" {CONNECT_TIMEOUT:g} s or the run stops)")
     c.add_argument("--workers", type=int, help="local cluster of N single-threaded worker processes"
-                                               " (default: the cores)")
+                                               " (default: the cores; at most the cores and the logs)")
     g = p.add_argument_group("input (the same for every log)")
     g.add_argument("--format", help="reader: csv, stable32, npy, npz, rosbag1, rosbag2, hdf5, parquet")
     g.add_argument("--columns", help="channels by column name or 0-based index, comma-separated")
@@ -1427,13 +1757,20 @@ def _cmd_batch(args: Any, console: Any) -> int:
         raise _UsageError(f"--workers {args.workers!r} must be at least 1")
     if not 0 < args.confidence < 1:
         raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    if not (math.isfinite(args.limit_margin) and args.limit_margin > 0):
+        raise _UsageError(f"--limit-margin {args.limit_margin!r} must be a positive finite number")
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler, name="--scheduler")
     figures = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
     if console.quiet:
         progress: Any = "none"
     else:
         progress = "bar" if sys.stderr.isatty() else "lines"
-    where = f"the Dask scheduler at {args.scheduler}" if args.scheduler else \
-        f"a local Dask cluster of {args.workers or _cores()} worker process(es)"
+    if args.scheduler:
+        where = f"the Dask scheduler at {args.scheduler}"
+    else:  # as analyze_many caps it (it warns when a --workers request is capped)
+        n_logs = len(expand_patterns(args.patterns, exclude=args.out))
+        where = f"a local Dask cluster of up to {_local_workers(args.workers, n_logs, _cores())[0]} worker process(es)"
     if not console.quiet:
         print(f"sigmatau batch: {args.out} on {where}", file=sys.stderr, flush=True)
     fleet = analyze_many(
