@@ -85,7 +85,8 @@ def test_tiny_run_end_to_end(bench, tmp_path):
     text = out.read_text()
     assert "(mode: tiny)" in text
     assert "| classic | 300 |" in text and "| memory | 300 |" in text
-    rows = list(csv.DictReader(out.with_suffix(".csv").open()))
+    with out.with_suffix(".csv").open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
     kinds = {(r.get("kind") or r.get("section") or "", r.get("statistic") or r.get("stat") or "") for r in rows}
     assert any("oadev" in k[1] for k in kinds), rows[:2]
     assert "DATA DIFFER" not in text
