@@ -22,6 +22,7 @@ import math
 import numpy as np
 import pytest
 
+from helpers import half_unit
 from refdata import load_table
 from sigmatau.confidence import (
     EDF_STATISTICS,
@@ -37,13 +38,6 @@ from sigmatau.confidence import (
     simple_error,
 )
 from sigmatau.errors import ParameterError
-
-
-def half_unit(text: str) -> float:
-    """Half a unit in the last printed digit of a decimal or e-notation string."""
-    mantissa, _, exponent = text.lower().partition("e")
-    decimals = len(mantissa.partition(".")[2])
-    return 0.5 * 10.0 ** (int(exponent or 0) - decimals)
 
 
 # --- numerics.md §7.4: NBS 1000-point set, α = 0 ---------------------------------------

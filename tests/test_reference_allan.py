@@ -14,27 +14,16 @@ from __future__ import annotations
 
 import functools
 import warnings
-from decimal import Decimal
 
 import numpy as np
 import pytest
 
 import refdata
+from helpers import assert_printed
 import sigmatau
 from sigmatau.datasets import nbs1000, nbs9
 
 STABLE32_RTOL = 1e-4
-
-
-def _half_unit(printed: str) -> float:
-    """Half a unit in the last digit of a printed number (trailing zeros count)."""
-    return 0.5 * 10.0 ** Decimal(printed).as_tuple().exponent
-
-
-def assert_printed(value: float, printed: str) -> None:
-    """``value`` rounds to ``printed`` at the digits shown there."""
-    ref = float(printed)
-    np.testing.assert_allclose(value, ref, rtol=_half_unit(printed) / abs(ref), atol=0.0)
 
 
 def compute(statistic: str, data, *, rate: float, data_type: str, m) -> sigmatau.StabilityResult:

@@ -18,24 +18,17 @@ every window.
 from __future__ import annotations
 
 import warnings
-from decimal import Decimal
 
 import numpy as np
 import pytest
 
 import refdata
+from helpers import assert_printed
 from sigmatau import tie
 from sigmatau.datasets import nbs1000
 from sigmatau.errors import DataError, ParameterError, RangeWarning
 
 STABLE32_RTOL = 1e-4
-
-
-def assert_printed(value: float, printed: str) -> None:
-    """``value`` rounds to ``printed`` at the digits shown there."""
-    ref = float(printed)
-    half = 0.5 * 10.0 ** Decimal(printed).as_tuple().exponent
-    np.testing.assert_allclose(value, ref, rtol=half / abs(ref), atol=0.0)
 
 
 def explicit(func, data, **kw):

@@ -35,6 +35,7 @@ from refdata import (
     tic_phase,
 )
 from sigmatau import oadev
+from helpers import half_unit
 from sigmatau._driver import prepare
 from sigmatau.datasets import nbs1000, nbs9
 from sigmatau.errors import DataError, ParameterError, RangeWarning
@@ -51,10 +52,7 @@ def assert_printed(values, printed, rel_slack=0.0):
     values = np.atleast_1d(values)
     assert values.size == len(printed)
     for v, text in zip(values, printed):
-        mantissa, _, exponent = text.lower().partition("e")
-        decimals = len(mantissa.split(".")[1]) if "." in mantissa else 0
-        unit = 10.0 ** (int(exponent or 0) - decimals)
-        allowed = 0.505 * unit + rel_slack * abs(float(text))
+        allowed = 1.01 * half_unit(text) + rel_slack * abs(float(text))
         assert abs(v - float(text)) <= allowed, f"{v!r} differs from printed {text}"
 
 
