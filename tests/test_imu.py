@@ -382,3 +382,48 @@ def test_parameter_formatting():
     assert b.format().startswith("< 2e-05") and "not resolved" in str(b)
     assert b.to("deg/h").high == pytest.approx(2e-5 * 180 / math.pi * 3600)
     assert b.to_dict()["value"] is None
+
+
+# ------------------------------------------------------- units of time and of the samples
+
+#: How each parameter scales when the same samples are declared at rate × r: τ → τ/r, so from
+#: the AVAR terms 3Q²/τ², N²/τ, B², K²τ/3, R²τ²/2: Q ∝ 1/r, N ∝ 1/√r, B ∝ 1, K ∝ √r, R ∝ r.
+RATE_POWER = {"Q": -1.0, "N": -0.5, "B": 0.0, "K": 0.5, "R": 1.0}
+
+
+@pytest.mark.parametrize("rate", [1e-8, 1e-3, 1e3, 1e5, 1e8])
+def test_model_follows_the_rate_exactly(rate):
+    # The same 2,000 samples declared at another rate: every value, bound and interval end scales
+    # by its power of the rate (before the equilibrated fit: 19-54 % off for bounds at 1e5 Hz).
+    y = simulate(duration=2000, rate=10, unit="rad/s", rng=3, N=1e-3, B=2.75e-4, K=1.8e-5)[:2000]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImuWarning)
+        base = analyze(y, rate=1.0, unit="rad/s", checks=False)
+        other = analyze(y, rate=rate, unit="rad/s", checks=False)
+    for t, power in RATE_POWER.items():
+        a, b = getattr(other, t), getattr(base, t)
+        assert a.resolved == b.resolved, t
+        factor = rate ** power
+        for got, ref in ((a.value, b.value), (a.low, b.low), (a.high, b.high)):
+            if np.isfinite(ref) and ref != 0:
+                assert got / factor == pytest.approx(ref, rel=1e-10), (t, got, ref)
+
+
+@pytest.mark.parametrize("exponent", [-150, -50, 50, 150])
+def test_model_scale_equivariant_or_refused(exponent):
+    y = simulate(duration=2000, rate=10, unit="rad/s", rng=3, N=1e-3, B=2.75e-4, K=1.8e-5)
+    s = 2.0 ** round(exponent * math.log2(10))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImuWarning)
+        base = analyze(y, rate=10, unit="rad/s", checks=False)
+        if abs(exponent) > 60:  # beyond DEVIATION_RANGE: one line, never zero-width intervals
+            with pytest.raises(DataError, match="fitted for deviations within"):
+                analyze(y * s, rate=10, unit="rad/s", checks=False)
+            return
+        scaled = analyze(y * s, rate=10, unit="rad/s", checks=False)
+    for t in "QNBKR":
+        a, b = getattr(scaled, t), getattr(base, t)
+        assert a.resolved == b.resolved, t
+        for got, ref in ((a.value, b.value), (a.low, b.low), (a.high, b.high)):
+            if np.isfinite(ref) and ref != 0:
+                assert got / s == pytest.approx(ref, rel=1e-10), (t, got, ref)
