@@ -29,9 +29,6 @@ from helpers import assert_one_line_error
 
 STATISTICS = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "ttotdev", "htotdev",
               "theo1", "theobr", "theoh", "mtie", "tierms", "stdev", "ostdev"]
-#: Computed by the caller's own kernel on the unscaled phase (sigmatau.theo through
-#: _driver.prepare): refused beyond a phase of 2**±450 (≈ 1e±135) instead of scaled.
-PREPARED = {"theobr", "theoh"}
 NO_INTERVAL = {"mtie", "tierms"}
 RTOL = 1e-12
 
@@ -78,11 +75,11 @@ def _quiet(f, *args, **kwargs):
 @pytest.mark.parametrize("name", STATISTICS)
 def test_representable_scales_give_the_unit_scale_answer(series, name, data_type, ci):
     # 1e±150: deviation within float64 but squares of the data near its limits (mtotdev gave
-    # NaN at 1e150 before the scaling). The prepared statistics stop at 1e±135, so 1e±120.
+    # NaN at 1e150 before the scaling; TheoBR/TheoH refused beyond 1e±135 before they used
+    # _driver.prepare_scaled).
     f = getattr(sigmatau, name)
     reference = _quiet(f, series, data_type=data_type, ci=ci)
-    top = 1e120 if name in PREPARED else 1e150
-    for scale in (1.0 / top, 1e-100, 1e100, top):
+    for scale in (1e-150, 1e-100, 1e100, 1e150):
         _compare(_quiet(f, series * scale, data_type=data_type, ci=ci), reference, scale)
 
 
@@ -101,11 +98,13 @@ def test_unrepresentable_variance_is_a_one_line_data_error(series, name, data_ty
     assert re.search(r"outside float64's range|outside the range this statistic computes", msg), msg
 
 
-def test_prepared_statistics_refuse_beyond_their_range(series):
-    # The documented limit of the statistics whose kernel runs on the unscaled phase.
-    for name in sorted(PREPARED):
-        with pytest.raises(DataError, match=r"phase of these data reaches"):
-            _quiet(getattr(sigmatau, name), series * 1e150)
+def test_theobr_kappa_is_scale_free(series):
+    # κ is a ratio of variances; it was refused beyond a phase of 2**±450 (≈ 1e±135).
+    reference = sigmatau.theobr_kappa(series)
+    for scale in (1e-150, 1e150):
+        k = sigmatau.theobr_kappa(series * scale)
+        assert k.n == reference.n
+        np.testing.assert_allclose(k.kappa, reference.kappa, rtol=RTOL, atol=0.0)
 
 
 def test_finish_refuses_an_overflowed_variance():

@@ -21,7 +21,9 @@ from typing import Literal, Optional
 import numpy as np
 from scipy import fft as _fft
 
-from ._driver import Statistic, finish, prepare, run
+from . import _driver
+from ._driver import Statistic, finish, run
+from ._input import unscale_variance
 from ._numeric import CHUNK, dot
 from ._input import DataType
 from ._uncertainty import CiMethod, check_options
@@ -815,8 +817,9 @@ def theobr_kappa(
     (1.085666, 30)
     """
     _check_kappa_method(method, "method")
-    x, _, _ = prepare(THEOBR, data, rate, data_type)
-    return _kappa(x, method)
+    # κ is a ratio of variances, so it is computed on the power-of-two-scaled phase.
+    p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
+    return _kappa(p.phase, method)
 
 
 @_doc
@@ -866,7 +869,10 @@ def theobr(
     """
     check_options(alpha, confidence, ci)
     method = _check_kappa_method(kappa)
-    x, rate_f, dtype = prepare(THEOBR, data, rate, data_type)
+    # The kernels run on the phase scaled by 2**-k (prepare() refuses beyond 2**±450);
+    # var(c·x) = c²·var(x) and κ is scale free, so unscaling the variance is exact.
+    p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
+    x, rate_f, dtype = p.phase, p.rate, p.data_type
     _check_kappa_points(x.size, dtype)
     ms = select_m(
         "theobr", n_points=x.size, rate=rate_f, taus=taus, m=m, points_per_decade=points_per_decade,
@@ -876,7 +882,7 @@ def theobr(
     kap = _kappa(x, method)
     tau0 = 1.0 / rate_f
     raw, n = _theo1_kernel(x, ms, tau0) if ms.size else (np.empty(0), np.empty(0, dtype=np.int64))
-    var = np.maximum(kap.kappa * raw, 0.0)
+    var = unscale_variance(np.maximum(kap.kappa * raw, 0.0), p.exponent, "theobr")
     result = StabilityResult(
         statistic="theobr", taus=0.75 * ms * tau0, m=ms, var=var, dev=np.sqrt(var), n=n,
         rate=rate_f, data_type=dtype, n_points=int(x.size), bias=_kappa_text(kap),
@@ -1036,7 +1042,9 @@ def theoh(
     """
     check_options(alpha, confidence, ci)
     method = _check_kappa_method(kappa)
-    x, rate_f, dtype = prepare(THEOH, data, rate, data_type)
+    # Scaled phase as in theobr(); the variance is unscaled before the low/high split.
+    p = _driver.prepare_scaled(THEOH, data, rate, data_type)
+    x, rate_f, dtype = p.phase, p.rate, p.data_type
     N = x.size
     _check_kappa_points(N, dtype)
     tau0 = 1.0 / rate_f
@@ -1045,7 +1053,7 @@ def theoh(
     va, na = _oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
     vb, nb = _theo1_kernel(x, mb, tau0) if mb.size else (np.empty(0), np.empty(0, dtype=np.int64))
     var = np.concatenate((np.asarray(va, dtype=float), kap.kappa * vb))
-    var = np.where(var < 0.0, 0.0, var)
+    var = unscale_variance(np.where(var < 0.0, 0.0, var), p.exponent, "theoh")
     k, m_lo = theoh_split(N)
     bias = (
         f"theoh: oavar for tau < {k * tau0:g} s (m < {k}); {_kappa_text(kap)} for tau >= {k * tau0:g} s"
