@@ -245,6 +245,36 @@ def test_too_short_and_empty():
         sigmatau.oadev(chunked.from_array(np.empty(0)))
 
 
+@pytest.mark.parametrize("data_type", ["freq", "phase"])
+@pytest.mark.parametrize("stat", chunked.STATISTICS)
+def test_extreme_scales_match_in_memory(stat, data_type):
+    # The in-memory path scales the data by a power of two; the streamed one did not
+    # (before: mdev/tdev a DataError on a NaN variance, totdev a -inf noise estimate at 1e150).
+    base = _series("WFM", data_type, 5003) * 1e9  # deviations near 1, so 1e±150 stays in float64
+    func = getattr(sigmatau, stat)
+    for scale in (1e-150, 1e-100, 1e100, 1e150):
+        data = base * scale
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sigmatau.SigmaTauWarning)
+            ref = func(data, rate=50.0, data_type=data_type)
+            got = func(chunked.from_array(data, chunk_size=997), rate=50.0, data_type=data_type)
+        _assert_same(got, ref)
+
+
+@pytest.mark.parametrize("scale", [1e-170, 1e-300, 1e170])
+def test_unrepresentable_variance_is_the_in_memory_error(scale):
+    # Before: a silent 0 at 1e-170 and 1e-300 (squares underflow), a bare "-inf + inf in
+    # fsum" ValueError from totdev at 1e170.
+    data = _series("WFM", "freq", 5003) * 1e9 * scale
+    for stat in chunked.STATISTICS:
+        func = getattr(sigmatau, stat)
+        with pytest.raises(DataError) as ref:
+            func(data)
+        with pytest.raises(DataError) as err:
+            func(chunked.from_array(data, chunk_size=997))
+        assert _one_line(err.value) == str(ref.value)
+
+
 def test_bad_shapes_and_dtypes(tmp_path):
     with pytest.raises(DataError, match="1-D"):
         chunked.from_array(np.zeros((10, 3)))

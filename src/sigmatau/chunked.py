@@ -42,6 +42,11 @@ How (N samples, chunk of L samples; every pass holds O(L) values)
   that series twice — for its means, then for its centred lag-0 and lag-1
   sums at every difference order — and follows the decision rules of
   :func:`sigmatau.noiseid.identify`.
+* Scale: the validating pass also finds max|x|; every chunk is multiplied by
+  the power of two 2**-k that brings it into [0.5, 1) as it is read, and the
+  variance by 4**k at the end (exact; as the in-memory path does), so data
+  near 1e±150 give the in-memory answer and a variance float64 cannot hold is
+  the same one-line DataError, never 0 or inf.
 
 Cost: O(N) time per τ (about five reads of the record: statistic and noise
 identification); memory O(L) per pass, plus N/L checkpoints for TOTDEV of
@@ -60,7 +65,7 @@ from typing import Callable, Iterator, Optional, Sequence, Union
 import numpy as np
 
 from ._driver import Statistic, _id_factors
-from ._input import check_data_type, check_rate
+from ._input import check_data_type, check_rate, unscale_variance
 from ._uncertainty import attach, check_options
 from .confidence import EDF_STATISTICS, ONE_SIGMA
 from .errors import DataError, ParameterError, RangeWarning
@@ -139,6 +144,8 @@ class ChunkedSeries:
         self.chunk_size = _check_chunk(chunk_size)
         self.name = name
         self._scan: Optional[float] = None
+        #: Largest |sample|, found by the validating pass (:func:`_scan`).
+        self._peak: Optional[float] = None
 
     def __len__(self) -> int:
         return self.n
@@ -161,7 +168,7 @@ class ChunkedSeries:
         """The same series read in pieces of ``chunk_size`` samples."""
         other = ChunkedSeries(self._read, self.n, chunk_size=chunk_size, name=self.name,
                               read_strided=self._read_strided, close=self._close)
-        other._scan = self._scan
+        other._scan, other._peak = self._scan, self._peak
         return other
 
     def read(self, start: int, stop: int) -> np.ndarray:
@@ -419,9 +426,13 @@ def _scan(src: ChunkedSeries) -> float:
         raise DataError(f"{src.name} is empty")
     bad: list[tuple[int, float]] = []
     count = [0]
+    peak = [0.0]
 
     def visit(start: int, v: np.ndarray) -> None:
         finite = np.isfinite(v)
+        if v.size and finite.all():
+            # The peak costs one more reduction of a chunk already in memory: no extra read.
+            peak[0] = max(peak[0], float(np.max(np.abs(v))))
         if not finite.all():
             idx = np.flatnonzero(~finite)
             count[0] += idx.size
@@ -434,8 +445,38 @@ def _scan(src: ChunkedSeries) -> float:
         raise DataError(
             f"{src.name} holds {count[0]} non-finite value(s) (first at index {i}: {value}); remove or fill them first"
         )
-    src._scan = total
+    src._scan, src._peak = total, peak[0]
     return total
+
+
+def _scaled(src: ChunkedSeries) -> tuple[ChunkedSeries, int]:
+    """``(src·2**-k, k)``: the series scaled as it is read, largest magnitude in [0.5, 1).
+
+    The streamed counterpart of :func:`sigmatau._input.scale_to_unit`: k comes from the
+    peak found by the validating pass (:func:`_scan`) and each chunk is multiplied by
+    2**-k (``numpy.ldexp``, exact) when read, so no square of data near 1e±170 overflows
+    or underflows; a variance from the scaled series is the user's × 4**-k
+    (:func:`sigmatau._input.unscale_variance` undoes it). Memory stays O(chunk).
+    """
+    total = _scan(src)
+    peak = src._peak or 0.0
+    k = math.frexp(peak)[1] if peak > 0.0 else 0
+    if k == 0:
+        return src, 0
+
+    def read(a: int, b: int) -> np.ndarray:
+        return np.ldexp(src.read(a, b), -k)
+
+    def strided(a: int, b: int, step: int) -> np.ndarray:
+        return np.ldexp(src.read_strided(a, b, step), -k)
+
+    out = ChunkedSeries(read, src.n, chunk_size=src.chunk_size, name=src.name, read_strided=strided)
+    # A power of two commutes with every rounding of the pairwise sum unless that sum
+    # overflowed (data near 1e308): then it is summed again from the scaled chunks.
+    scaled_total = math.ldexp(total, -k) if math.isfinite(total) else math.inf
+    out._scan = scaled_total if math.isfinite(scaled_total) else _pairwise_sum(out.read, 0, out.n, out.chunk_size)
+    out._peak = math.ldexp(peak, -k)
+    return out, k
 
 
 # ------------------------------------------------------------------- derived series
@@ -1135,7 +1176,9 @@ def _run(
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     rate_f = check_rate(rate)
     dtype = check_data_type(data_type)
-    src = as_chunked(data)
+    # Kernels and noise identification run on the data scaled by 2**-k as they are read
+    # (as the in-memory path does); the variance is unscaled below.
+    src, k = _scaled(as_chunked(data))
     total = _scan(src)
     n_points = src.n if dtype == "phase" else src.n + 1
     if n_points < stat.min_points:
@@ -1160,7 +1203,7 @@ def _run(
             var, n = freq_kernel(centred, ms, tau0, L)
         else:
             var, n = phase_kernel(_Integrated(centred, tau0, L), ms, tau0, L)
-    var = np.where(var < 0.0, 0.0, np.asarray(var, dtype=float))
+    var = unscale_variance(np.where(var < 0.0, 0.0, np.asarray(var, dtype=float)), k, stat.name)
     result = StabilityResult(
         statistic=stat.name, taus=stat.tau_factor * ms * tau0, m=ms, var=var, dev=np.sqrt(var),
         n=np.asarray(n, dtype=np.int64), rate=rate_f, data_type=dtype, n_points=int(n_points),
@@ -1175,8 +1218,8 @@ def _finish(result: StabilityResult, data: object, data_type: str, *, alpha: obj
             identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
     """:func:`sigmatau._driver.finish` for chunked data."""
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
-    src = as_chunked(data)
-    _scan(src)
+    # Noise identification is scale free: on the scaled series, as in _run().
+    src, _ = _scaled(as_chunked(data))
     return _attach(result, src, data_type, alpha=alpha_i, confidence=conf, ci=ci_m, identified=identified)
 
 
