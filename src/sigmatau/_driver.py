@@ -212,9 +212,7 @@ def run(
 
         result = _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m,
                       points_per_decade=points_per_decade, alpha=alpha, confidence=confidence, ci=ci, raw=raw)
-        # The streamed kernels do not scale the data: an overflowed variance must not reach
-        # the user as inf (an underflow to exactly 0 is not detectable here).
-        unscale_variance(result.var, 0, stat.name)
+        # chunked._run scales the streamed data by 2**-k and checks the variance itself.
         return result
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
