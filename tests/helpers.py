@@ -49,3 +49,22 @@ def assert_one_line_error(result: subprocess.CompletedProcess | tuple[int, str],
     if match is not None:
         assert re.search(match, lines[0]), f"{match!r} not in {lines[0]!r}"
     return lines[0]
+
+
+def run_cli(argv, capsys) -> tuple[int, str, str]:
+    """``sigmatau.cli.main`` on ``argv`` (items made strings) in process: (exit code, stdout, stderr)."""
+    from sigmatau.cli import main
+
+    code = main([str(a) for a in argv])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def cli_error_line(err: str, *patterns: str) -> str:
+    """The one error line of a CLI run's stderr (warning lines aside), containing every pattern."""
+    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("sigmatau: warning:")]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    for p in patterns:
+        assert p in lines[0], (p, lines[0])
+    return lines[0]

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import cli_error_line, run_cli
 
 from sigmatau import __version__
 from sigmatau.cli import main
@@ -26,19 +27,8 @@ def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _run(argv, capsys):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_line_error(err: str, *patterns: str) -> str:
-    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("sigmatau: warning:")]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    for p in patterns:
-        assert p in lines[0], (p, lines[0])
-    return lines[0]
+_run = run_cli
+_one_line_error = cli_error_line
 
 
 def _no_partial(folder: Path) -> None:

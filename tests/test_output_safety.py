@@ -20,25 +20,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import cli_error_line, run_cli
 
-from sigmatau.cli import main
 
 FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
 
 
-def _run(argv, capsys):
-    code = main([str(a) for a in argv])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def _one_line_error(err: str, *patterns: str) -> str:
-    lines = [ln for ln in err.splitlines() if ln.strip() and not ln.startswith("sigmatau: warning:")]
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    for p in patterns:
-        assert p in lines[0], (p, lines[0])
-    return lines[0]
+_run = run_cli
+_one_line_error = cli_error_line
 
 
 def _log(path: Path, names: list[str], rng: np.random.Generator, n: int = 2000) -> Path:
