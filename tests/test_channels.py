@@ -39,3 +39,42 @@ def test_errors_are_one_line():
         sigmatau.compute_channels(sigmatau.oadev, _channels(k=2), workers=0)
     with pytest.raises(DataError, match="channel 'c1'"):
         sigmatau.compute_channels(sigmatau.oadev, {"c0": np.ones(10), "c1": [1.0, np.nan, 2.0]})
+
+
+def test_long_factor_silence_stays_in_its_thread():
+    """R(n) silences its long-τ RangeWarning for its own thread only.
+
+    It used ``warnings.catch_warnings``, whose filters are process-wide: a worker
+    of ``compute_channels`` restored them while another was inside, and the
+    warning escaped as an error (CI, ``test_parallel_equals_serial[theo1]``).
+    """
+    import threading
+
+    from sigmatau.errors import RangeWarning
+    from sigmatau.taus import long_factors_expected
+
+    x = np.random.default_rng(3).standard_normal(4000)
+    inside, release = threading.Event(), threading.Event()
+
+    def hold():
+        with long_factors_expected():
+            inside.set()
+            release.wait(10)
+
+    worker = threading.Thread(target=hold)
+    worker.start()
+    try:
+        assert inside.wait(10)
+        with pytest.warns(RangeWarning, match="few degrees of freedom"):
+            sigmatau.oadev(x, m=[1500], ci=None)
+    finally:
+        release.set()
+        worker.join()
+    with long_factors_expected():
+        sigmatau.oadev(x, m=[1500], ci=None)  # filterwarnings=error: a warning here fails the test
+
+
+def test_parallel_theo1_warns_nothing_under_many_runs():
+    data = _channels(n=8000, k=4)
+    for _ in range(5):
+        sigmatau.compute_channels(sigmatau.theo1, data, workers=2, rate=50.0)

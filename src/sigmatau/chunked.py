@@ -57,7 +57,6 @@ from __future__ import annotations
 
 import math
 import os
-import warnings
 from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Iterator, Optional, Sequence, Union
@@ -68,9 +67,9 @@ from ._driver import Statistic, _id_factors
 from ._input import check_data_type, check_rate, unscale_variance
 from ._uncertainty import attach, check_options
 from .confidence import EDF_STATISTICS, ONE_SIGMA
-from .errors import DataError, ParameterError, RangeWarning
+from .errors import DataError, ParameterError
 from .result import StabilityResult
-from .taus import select_m
+from .taus import long_factors_expected, select_m
 
 __all__ = [
     "DEFAULT_CHUNK",
@@ -1057,8 +1056,7 @@ def _rn(src: ChunkedSeries, m: int, dtype: str) -> float:
     npts = src.n if dtype == "phase" else src.n + 1
     if npts < 3 * m:
         raise InsufficientDataError(f"R(n) needs at least {3 * m} phase points at m={m}, got {npts}")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", RangeWarning)
+    with long_factors_expected():  # long-τ factors are the point here
         mv = _run(MVAR, src, rate=1.0, data_type=dtype, taus="octave", m=[m], ci=None).var[0]
         av = _run(OAVAR, src, rate=1.0, data_type=dtype, taus="octave", m=[m], ci=None).var[0]
     if av == 0.0:

@@ -115,6 +115,7 @@ from scipy.special import chdtrc, ndtri
 
 from ._input import as_series, check_rate
 from .allan import oadev
+from . import checks as checks_module
 from .checks import DataChecks, check_samples
 from .confidence import ONE_SIGMA, deviation_interval, edf_array
 from .errors import DataError, ParameterError, SigmaTauWarning
@@ -1688,12 +1689,12 @@ def analyze(
         if n_samples < 16:
             raise DataError(f"an IMU noise model needs at least 16 samples, got {n_samples}")
         if checks:
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                data_checks = check_samples(y, rate=rate_f, unit=unit, lsb=None if lsb is None else lsb,
-                                            odr=odr, full_scale=full_scale)
-            for w in caught:
-                warnings.warn(w.message, w.category, stacklevel=2)
+            # warn=False and re-issued here (not catch_warnings): the warning filters are
+            # process-wide, and channels are analysed in threads (analysis.analyze_log).
+            data_checks = check_samples(y, rate=rate_f, unit=unit, lsb=None if lsb is None else lsb,
+                                        odr=odr, full_scale=full_scale, warn=False)
+            for cls_name, msg in data_checks.warned:
+                warnings.warn(msg, getattr(checks_module, cls_name), stacklevel=2)
             for cls, msg in data_checks.warned:
                 quantized = cls == "QuantizationWarning"
                 flags.append(Flag("quantized" if quantized else "data", "N" if quantized else "", msg))

@@ -19,7 +19,6 @@ Noise types are named by the exponent α of the one-sided frequency PSD
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from typing import Literal, Mapping, Optional, Sequence, Union
 
@@ -30,8 +29,9 @@ from ._numeric import block_means, dot, sumsq
 from ._powerlaw import EULER_GAMMA as _EULER_GAMMA
 from ._powerlaw import response
 from .allan import mdev, oadev
-from .errors import DataError, ParameterError, RangeWarning
+from .errors import DataError, ParameterError
 from .result import StabilityResult
+from .taus import long_factors_expected
 
 __all__ = [
     "NOISE_NAMES",
@@ -605,8 +605,7 @@ def rn_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
     npts = series.size if dtype == "phase" else series.size + 1
     if npts < 3 * m:
         raise InsufficientDataError(f"R(n) needs at least {3 * m} phase points at m={m}, got {npts}")
-    with warnings.catch_warnings():  # long-τ factors are the point here
-        warnings.simplefilter("ignore", RangeWarning)
+    with long_factors_expected():  # long-τ factors are the point here
         mv = mdev(series, data_type=dtype, m=[m], ci=None).var[0]
         av = oadev(series, data_type=dtype, m=[m], ci=None).var[0]
     if av == 0.0:

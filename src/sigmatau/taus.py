@@ -18,19 +18,43 @@ mathematical limit of the estimator, with a :class:`~sigmatau.errors.RangeWarnin
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 import math
 import warnings
+from collections.abc import Iterator
 from typing import Literal, Union
 
 import numpy as np
 
 from .errors import ParameterError, RangeWarning
 
-__all__ = ["TauGrid", "TAU_GRIDS", "m_grid", "select_m"]
+__all__ = ["TauGrid", "TAU_GRIDS", "m_grid", "select_m", "long_factors_expected"]
 
 TauGrid = Literal["octave", "decade", "all", "log"]
 TAU_GRIDS: tuple[str, ...] = ("octave", "decade", "all", "log")
 TausArg = Union[str, "np.typing.ArrayLike"]
+
+# A context variable, not warnings.catch_warnings: the warning filters are
+# process-wide, so a catch_warnings block in one worker thread (compute_channels)
+# restores them under another thread's feet and its long-τ warning escapes.
+_LONG_FACTORS_EXPECTED = contextvars.ContextVar("sigmatau_long_factors_expected", default=False)
+
+
+@contextlib.contextmanager
+def long_factors_expected() -> Iterator[None]:
+    """Silence the few-degrees-of-freedom :class:`~sigmatau.errors.RangeWarning` in this context.
+
+    For internal callers that ask for long averaging factors on purpose (the
+    R(n) noise test, the allantools-compatible grids). Thread- and task-safe:
+    the flag lives in a :class:`contextvars.ContextVar`, so other threads keep
+    their warnings.
+    """
+    token = _LONG_FACTORS_EXPECTED.set(True)
+    try:
+        yield
+    finally:
+        _LONG_FACTORS_EXPECTED.reset(token)
 
 
 def m_grid(
@@ -147,7 +171,7 @@ def select_m(
             f"{name}: m={ms[bad].tolist()} outside the range {m_min}..{m_max} allowed for"
             f" {n_points} phase points"
         )
-    if explicit and np.any(ms > default_max):
+    if explicit and np.any(ms > default_max) and not _LONG_FACTORS_EXPECTED.get():
         warnings.warn(
             f"{name}: m > {default_max} (N/{stop_ratio:g}) has few degrees of freedom;"
             f" computed as requested for m={ms[ms > default_max].tolist()}",

@@ -89,7 +89,6 @@ Examples
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from typing import Callable, Literal, Union
 
@@ -98,7 +97,8 @@ import numpy.typing as npt
 
 from .. import allan, hadamard, theo, tie, total
 from .._input import as_series, check_data_type, check_rate
-from ..errors import DataError, ParameterError, RangeWarning
+from ..errors import DataError, ParameterError
+from ..taus import long_factors_expected
 
 __all__ = [
     "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev",
@@ -250,9 +250,8 @@ def _compute(name: str, data: object, rate: object, data_type: object, taus: obj
         )
     if spec.offset_sensitive and dtype == "freq":
         series = series - series.mean()
-    with warnings.catch_warnings():
-        # allantools' grids run to the estimator's limit, past sigmatau's default stop.
-        warnings.simplefilter("ignore", RangeWarning)
+    # allantools' grids run to the estimator's limit, past sigmatau's default stop.
+    with long_factors_expected():
         res = spec.func(series, rate=rate_f, data_type=dtype, m=ms, ci=None)
     devs = np.array(res.dev, dtype=np.float64)
     ns = np.array(res.n, dtype=np.float64)
