@@ -155,8 +155,9 @@ def octave_grid(stat: str, n_points: int) -> Optional[list[int]]:
 
     Used only when our own run timed out, to still give the peer the same τ grid.
     """
-    from sigmatau import _driver, allan, hadamard, theo, tie, total
-    from sigmatau.taus import select_m
+    from sigmatau.core import driver as _driver
+    from sigmatau.stats import allan, hadamard, theo, tie, total
+    from sigmatau.core.taus import select_m
 
     for module in (allan, hadamard, total, theo, tie):
         for obj in vars(module).values():

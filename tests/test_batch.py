@@ -311,11 +311,11 @@ def test_limits_from_preset_and_files(tmp_path):
 
 
 def test_import_sigmatau_loads_no_dask_and_missing_dask_is_named(monkeypatch):
-    code = "import sys, sigmatau, sigmatau.batch, sigmatau.cli; sigmatau.cli._parser(); " \
+    code = "import sys, sigmatau, sigmatau.batch, sigmatau.cli.app; sigmatau.cli.app._parser(); " \
            "print([m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')])"
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True).stdout.strip() == "[]"
-    from sigmatau import batch
+    from sigmatau.scale import batch
     from sigmatau.io import MissingDependencyError
 
     monkeypatch.setitem(sys.modules, "distributed", None)

@@ -51,7 +51,7 @@ def test_long_factor_silence_stays_in_its_thread():
     import threading
 
     from sigmatau.errors import RangeWarning
-    from sigmatau.taus import long_factors_expected
+    from sigmatau.core.taus import long_factors_expected
 
     x = np.random.default_rng(3).standard_normal(4000)
     inside, release = threading.Event(), threading.Event()

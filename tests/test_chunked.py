@@ -23,7 +23,7 @@ import pytest
 
 import sigmatau
 from _noise import NOISES
-from sigmatau import chunked
+from sigmatau.scale import chunked
 from sigmatau.errors import DataError, ParameterError
 
 RTOL = 1e-12

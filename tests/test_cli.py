@@ -307,7 +307,7 @@ def test_force_never_deletes_the_input(tmp_path, imu_csv, capsys):
 
 
 def test_failure_while_writing_leaves_nothing(imu_csv, tmp_path, capsys, monkeypatch):
-    from sigmatau import plots
+    from sigmatau.report import plots
 
     def boom(*a, **k):
         raise RuntimeError("disk on fire")

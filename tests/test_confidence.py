@@ -503,7 +503,7 @@ def test_large_m_is_numerically_stable():
 
 
 def test_second_difference_matches_direct_formula():
-    from sigmatau.confidence import _sw, _sx
+    from sigmatau.uncertainty.confidence import _sw, _sx
 
     for F in (1.0, 3.0, 10.0, 37.5):
         t = np.concatenate([np.arange(0, 4 * F + 1) / F, np.linspace(-4, 4, 101)])

@@ -22,7 +22,7 @@ import pytest
 
 import sigmatau
 from sigmatau import DataError, ParameterError, SigmaTauError
-from sigmatau._input import RATE_RANGE
+from sigmatau.core.validate import RATE_RANGE
 from sigmatau.cli import main
 
 from helpers import assert_one_line_error
@@ -109,8 +109,8 @@ def test_theobr_kappa_is_scale_free(series):
 
 def test_finish_refuses_an_overflowed_variance():
     # A kernel outside the driver (theo.py) that overflowed must not reach the user as inf.
-    from sigmatau._driver import finish
-    from sigmatau.result import StabilityResult
+    from sigmatau.stats.engine import finish
+    from sigmatau.core.result import StabilityResult
 
     r = StabilityResult(statistic="theobr", taus=np.array([1.5]), m=np.array([2]), var=np.array([np.inf]),
                         dev=np.array([np.inf]), n=np.array([10]), rate=1.0, data_type="freq", n_points=129)
@@ -357,9 +357,9 @@ def test_conversions_keep_negligible_subnormals():
 
 def test_prepare_scaled_gives_the_run_answer(series):
     # The helper for kernels called outside run(): kernel on the scaled phase, then unscale.
-    from sigmatau._driver import prepare, prepare_scaled
-    from sigmatau._input import unscale_variance
-    from sigmatau.theo import THEO1
+    from sigmatau.core.driver import prepare, prepare_scaled
+    from sigmatau.core.validate import unscale_variance
+    from sigmatau.stats.theo import THEO1
 
     ms = np.array([2, 4, 16])
     for scale in (1e-150, 1.0, 1e150):

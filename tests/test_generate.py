@@ -38,7 +38,7 @@ from sigmatau.generate import (
     octave_flicker,
     power_law_noise,
 )
-from sigmatau.generate import _kasdin_filter
+from sigmatau.noise.generate import _kasdin_filter
 
 ALPHAS = [2, 1, 0, -1, -2, -3, -4]
 METHODS = ["kasdin", "tip"]

@@ -300,7 +300,7 @@ def test_whole_float_m_accepted(stat):
 
 
 # taus="octave" is the default, so m given with it is taken as overriding the default grid
-# (documented in sigmatau.taus); every other taus together with m is an error.
+# (documented in sigmatau.core.taus); every other taus together with m is an error.
 @pytest.mark.parametrize("taus", ["decade", "all", "log", [1.0, 2.0], 4.0])
 def test_taus_and_m_together(stat, taus):
     with pytest.raises(ParameterError) as exc_info:

@@ -1,7 +1,7 @@
 """The single-sided upper bound given where the EDF falls below 1.
 
 Below ν = 1 a two-sided χ² interval says nothing useful, so the last low-EDF rows of a run get
-``[0, hi]`` with ``P(σ² ≤ hi) = p`` (``sigmatau._uncertainty.SINGLE_SIDED_EDF``). Two checks:
+``[0, hi]`` with ``P(σ² ≤ hi) = p`` (``sigmatau.uncertainty.attach.SINGLE_SIDED_EDF``). Two checks:
 
 - the bound itself is exact for a χ²_ν variate at ν < 1 (draws of ``ν s²/σ² ~ χ²_ν``);
 - end to end, a Theo1 row whose empirical EDF is below 1 (random-walk FM, m near the end of the

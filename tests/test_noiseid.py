@@ -786,7 +786,7 @@ def test_fit_power_law_uses_edf_weights():
 
 
 def test_public_names_are_exported_by_the_module():
-    import sigmatau.noiseid as mod
+    import sigmatau.uncertainty.noiseid as mod
 
     for name in mod.__all__:
         assert hasattr(mod, name), name

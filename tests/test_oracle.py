@@ -300,7 +300,7 @@ def test_filter_chain_rejects_bad_factor() -> None:
 def test_window_sums_follow_their_definition() -> None:
     """WindowSums reaches every w through doublings, unit steps and restarts; every
     route gives the plain sums A_w[j] = Σ y_j…y_{j+w-1} and B_w[j] = Σ A_w[j…j+w-1]."""
-    from sigmatau._numeric import WindowSums
+    from sigmatau.core.numeric import WindowSums
 
     rng = np.random.default_rng(11)
     y = rng.standard_normal(97)
@@ -334,7 +334,7 @@ GRIDS = {
 def test_chunked_kernels_on_every_grid(name: str, noise: str, grid: str, monkeypatch) -> None:
     """Chunk boundaries everywhere (chunks of 5 samples) and every route through the
     carried sums (the grids of the τ keywords): still the filter chain to RTOL."""
-    import sigmatau._numeric as numeric
+    import sigmatau.core.numeric as numeric
 
     monkeypatch.setattr(numeric, "CHUNK", 5)
     spec = SPECS[name]

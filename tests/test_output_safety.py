@@ -392,7 +392,7 @@ def test_list_topics_escapes_control_characters(tmp_path, capsys):
 
 @pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
 def test_figures_are_capped_and_the_cap_is_said_once(tmp_path, capsys, monkeypatch):
-    from sigmatau import outputs
+    from sigmatau.report import outputs
 
     monkeypatch.setattr(outputs, "MAX_SIGNAL_FIGURES", 2)
     monkeypatch.setattr(outputs, "MAX_SIGMA_TAU_FIGURES", 1)

@@ -29,8 +29,8 @@ def gyro():
     K is large enough for its +½ region to appear within the record on this seed, B small enough to
     show a flat stretch first, so the figure has resolved, read-off and unresolved terms.
     """
-    b = imu._g(6.0, "deg/h", "rad/s")
-    k = imu._g(150.0, "deg/h/sqrt(h)", "rad/s^2/sqrt(Hz)")
+    b = float(sigmatau.units.convert(6.0, "deg/h", "rad/s"))
+    k = float(sigmatau.units.convert(150.0, "deg/h/sqrt(h)", "rad/s^2/sqrt(Hz)"))
     chans = []
     for i, axis in enumerate("xyz"):
         y = imu.simulate("lsm6dsl-gyro", duration=1200.0, rate=RATE, B=b, K=k, rng=100 + i)

@@ -14,7 +14,7 @@ import pytest
 import sigmatau
 from sigmatau import ParameterError, RangeWarning
 from sigmatau.datasets import nbs1000
-from sigmatau.taus import TAU_GRIDS, m_grid, select_m
+from sigmatau.core.taus import TAU_GRIDS, m_grid, select_m
 
 # name -> (Stable32 stop ratio, mathematical largest m for N phase points).
 # stdev/ostdev are not in Stable32's table; they follow AVAR (5) and OAVAR (4).

@@ -1,4 +1,4 @@
-"""Theo1, TheoBR and TheoH (sigmatau.theo).
+"""Theo1, TheoBR and TheoH (sigmatau.stats.theo).
 
 Sources (numerics.md, tests/data/allantools/README.md):
 
@@ -36,8 +36,8 @@ import numpy as np
 import pytest
 
 import refdata
-from sigmatau import theo
-from sigmatau.allan import oadev
+from sigmatau.stats import theo
+from sigmatau.stats.allan import oadev
 from sigmatau.datasets import nbs1000
 from sigmatau.errors import DataError, ParameterError, RangeWarning
 

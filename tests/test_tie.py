@@ -24,7 +24,7 @@ import pytest
 
 import refdata
 from helpers import assert_printed
-from sigmatau import tie
+from sigmatau.stats import tie
 from sigmatau.datasets import nbs1000
 from sigmatau.errors import DataError, ParameterError, RangeWarning
 
@@ -169,7 +169,7 @@ def test_errors():
 def test_mtie_octave_doubling_and_rebuilds_in_chunks(chunk, monkeypatch):
     """The running extremes are carried by doubling along the octave grid and rebuilt
     for other factors; with tiny chunks every chunk boundary is crossed."""
-    import sigmatau._numeric as numeric
+    import sigmatau.core.numeric as numeric
 
     if chunk is not None:
         monkeypatch.setattr(numeric, "CHUNK", chunk)

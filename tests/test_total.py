@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 import refdata
-import sigmatau.total as total_mod
+import sigmatau.stats.total as total_mod
 from refdata import (
     PINK_RATE,
     gps_phase,
@@ -36,10 +36,10 @@ from refdata import (
 )
 from sigmatau import oadev
 from helpers import half_unit
-from sigmatau._driver import prepare
+from sigmatau.core.driver import prepare
 from sigmatau.datasets import nbs1000, nbs9
 from sigmatau.errors import DataError, ParameterError, RangeWarning
-from sigmatau.total import htotdev, mtotdev, totdev, ttotdev
+from sigmatau.stats.total import htotdev, mtotdev, totdev, ttotdev
 
 
 def assert_printed(values, printed, rel_slack=0.0):

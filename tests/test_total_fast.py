@@ -22,11 +22,11 @@ import numpy as np
 import pytest
 from numpy.lib.stride_tricks import sliding_window_view
 
-import sigmatau.total as total_mod
+import sigmatau.stats.total as total_mod
 from _noise import NOISES
-from sigmatau._driver import prepare
+from sigmatau.core.driver import prepare
 from sigmatau.errors import RangeWarning
-from sigmatau.total import htotdev, mtotdev, ttotdev
+from sigmatau.stats.total import htotdev, mtotdev, ttotdev
 
 RTOL = 1e-9
 

@@ -9,20 +9,21 @@ the rest of the toolkit; ``sigmatau.io`` reads sensor logs (imported on demand).
 from __future__ import annotations
 
 from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, units
-from ._input import frequency_to_phase, phase_to_frequency
+from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
-from .allan import adev, mdev, oadev, ostdev, stdev, tdev
-from .channels import compute_channels
-from .confidence import ONE_SIGMA, deviation_interval, edf
+from .stats.allan import adev, mdev, oadev, ostdev, stdev, tdev
+from .scale import chunked as _chunked  # noqa: F401  (registers dask arrays as streamed records)
+from .scale.channels import compute_channels
+from .uncertainty.confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
-from .generate import mixed_noise, power_law_noise
-from .hadamard import hdev, ohdev
-from .imu import NoiseModel
-from .noiseid import fit_power_law, identify, local_slopes
-from .result import StabilityResult
-from .theo import theo1, theobr, theobr_kappa, theoh
-from .tie import mtie, tierms
-from .total import htotdev, mtotdev, totdev, ttotdev
+from .noise.generate import mixed_noise, power_law_noise
+from .stats.hadamard import hdev, ohdev
+from .imu.model import NoiseModel
+from .uncertainty.noiseid import fit_power_law, identify, local_slopes
+from .core.result import StabilityResult
+from .stats.theo import theo1, theobr, theobr_kappa, theoh
+from .stats.tie import mtie, tierms
+from .stats.total import htotdev, mtotdev, totdev, ttotdev
 
 __all__ = [
     "__version__",

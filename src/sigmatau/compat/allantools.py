@@ -95,10 +95,10 @@ from typing import Callable, Literal, Union
 import numpy as np
 import numpy.typing as npt
 
-from .. import allan, hadamard, theo, tie, total
-from .._input import as_series, check_data_type, check_rate
+from ..stats import allan, hadamard, theo, tie, total
+from ..core.validate import as_series, check_data_type, check_rate
 from ..errors import DataError, ParameterError
-from ..taus import long_factors_expected
+from ..core.taus import long_factors_expected
 
 __all__ = [
     "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev",

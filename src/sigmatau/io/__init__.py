@@ -44,15 +44,18 @@ Examples
 
 from __future__ import annotations
 
-from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
+from ._errors import (
+    FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning, require_optional,
+)
 from ._limits import MAX_CHANNELS, MAX_LINE_CHARS
 from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
-from ._read import MIN_SAMPLES, detect_format, list_topics, read
-from ._registry import formats
+from ._read import MIN_SAMPLES, check_read_options, detect_format, list_topics, read
+from ._registry import file_sha256, formats
 from ._units import DEFAULT_UNITS, GROUP_UNITS, SI_UNITS, TIME_UNITS
 
 __all__ = [
     "read",
+    "check_read_options",
     "list_topics",
     "formats",
     "detect_format",
@@ -73,4 +76,6 @@ __all__ = [
     "MIN_SAMPLES",
     "MAX_CHANNELS",
     "MAX_LINE_CHARS",
+    "file_sha256",
+    "require_optional",
 ]

@@ -13,7 +13,7 @@ __all__ = [
     "MissingDependencyError",
     "InputWarning",
     "TimingWarning",
-    "need",
+    "require_optional",
     "option_hint",
     "repr_kw",
 ]
@@ -39,7 +39,7 @@ class TimingWarning(InputWarning):
     """Timestamps were sorted or de-duplicated, or they disagree with the declared rate."""
 
 
-def need(module: str, *, extra: str, package: str, what: str) -> ModuleType:
+def require_optional(module: str, *, extra: str, package: str, what: str) -> ModuleType:
     """Import an optional dependency or raise :class:`MissingDependencyError` naming the extra."""
     try:
         return importlib.import_module(module)

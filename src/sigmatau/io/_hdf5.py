@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import DataError, ParameterError
 from ._columns import select
-from ._errors import FormatError, need, option_hint
+from ._errors import FormatError, require_optional, option_hint
 from ._limits import check_allocation
 from ._numpy import RATE_KEYS, split_2d
 from ._progress import Progress
@@ -86,7 +86,7 @@ def _unit_attr(obj: Any) -> Any:
 @register("hdf5", extensions=(".h5", ".hdf5", ".hdf", ".he5"),
           description="HDF5 dataset or group (needs extra 'hdf5')", options=("dataset",))
 def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Table:
-    h5py = need("h5py", extra="hdf5", package="h5py", what="HDF5 files")
+    h5py = require_optional("h5py", extra="hdf5", package="h5py", what="HDF5 files")
     try:
         f = h5py.File(path, "r")
     except (OSError, ValueError) as exc:

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import DataError
 from ._columns import select
-from ._errors import FormatError, need
+from ._errors import FormatError, require_optional
 from ._limits import check_allocation
 from ._numpy import RATE_KEYS
 from ._progress import Progress
@@ -37,7 +37,7 @@ def _meta(meta: dict | None, keys: tuple[str, ...]) -> str | None:
 
 @register("parquet", extensions=(".parquet", ".pq"), description="Apache Parquet table (needs extra 'parquet')")
 def read_parquet(path: Path, display: str, opts: Options, progress: Progress) -> Table:
-    need("pyarrow", extra="parquet", package="pyarrow", what="Parquet files")
+    require_optional("pyarrow", extra="parquet", package="pyarrow", what="Parquet files")
     import pyarrow as pa
     import pyarrow.parquet as pq
 

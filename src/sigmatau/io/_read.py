@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import inspect
+
 import os
 import warnings as _warnings
 from pathlib import Path
@@ -9,7 +11,7 @@ from typing import Literal, Mapping, Sequence, Union
 
 import numpy as np
 
-from .._input import DataType, check_data_type, check_rate
+from ..core.validate import DataType, check_data_type, check_rate
 from ..errors import DataError, ParameterError, SigmaTauError
 from . import _hdf5, _numpy, _parquet, _ros, _text  # noqa: F401  (they register their readers)
 from ._columns import list_names, recognise, unused_message
@@ -58,6 +60,27 @@ def _resolve(path: object) -> tuple[Path, str]:
     if p.is_file() and p.stat().st_size == 0:
         raise DataError(f"{display}: the file is empty")
     return p, display
+
+
+def check_read_options(**options: object) -> None:
+    """Check keyword options of :func:`read` without reading anything.
+
+    Raises
+    ------
+    ParameterError
+        One line naming an unknown option or a bad value, as :func:`read` would.
+    """
+    sig = inspect.signature(read)
+    try:
+        bound = sig.bind("<path>", **options)
+    except TypeError:
+        unknown = sorted(set(options) - set(sig.parameters))
+        raise ParameterError(f"unknown read option(s) {', '.join(map(repr, unknown))}; sigmatau.io.read takes"
+                             f" {', '.join(k for k in sig.parameters if k not in ('path', 'progress'))}") from None
+    bound.apply_defaults()
+    full = dict(bound.arguments)
+    full.pop("path")
+    _options(**full)
 
 
 def _options(**kw: object) -> Options:

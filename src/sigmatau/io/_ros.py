@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ._columns import select
-from ._errors import FormatError, need, option_hint
+from ._errors import FormatError, require_optional, option_hint
 from ._model import TopicInfo
 from ._progress import Progress
 from ._registry import Options, Table, file_sha256, register
@@ -36,7 +36,7 @@ _GYRO_WORD, _ACCEL_WORD, _WORDS = 13, 25, 37
 
 
 def _rosbags(what: str) -> Any:
-    need("rosbags", extra="ros", package="rosbags", what=what)
+    require_optional("rosbags", extra="ros", package="rosbags", what=what)
     from rosbags.highlevel import AnyReader
     from rosbags.typesys import Stores, get_typestore
 

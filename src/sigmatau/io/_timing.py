@@ -23,7 +23,7 @@ import numpy as np
 
 from ..errors import DataError
 from ._errors import option_hint, repr_kw
-from ._model import Gap, TimingReport
+from ._timing_report import Gap, TimingReport
 from ._units import TIME_UNITS
 
 __all__ = ["check_times", "infer_time_unit", "process", "untimed", "segment_report"]

@@ -1,28 +1,32 @@
-"""Running one statistic's kernel over a τ grid and packaging the result.
+"""One statistic's kernel over a τ grid, packaged as a result (no noise type or interval).
 
-Every public statistic function is a thin wrapper: it describes its estimator
-with a :class:`Statistic` and calls :func:`run`, which validates the inputs,
-converts frequency data to phase, chooses the averaging factors and builds the
-:class:`~sigmatau.result.StabilityResult`.
+Every estimator is described by a :class:`Statistic`; :func:`compute` validates
+the inputs, converts frequency data to phase when the kernel wants phase,
+chooses the averaging factors and builds the raw
+:class:`~sigmatau.core.result.StabilityResult`. The statistics layer adds the
+noise type and interval (:func:`sigmatau.stats.engine.run`). Records that are
+computed piecewise reach the statistics through the :class:`StreamedSeries`
+protocol defined here and implemented by the scale-out layer.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Optional
+from typing import Any, Callable, Optional, Protocol
 
 import numpy as np
 
-from ._input import (
+from .validate import (
     as_series, check_data_type, check_rate, remove_linear_phase, scale_to_unit, to_phase, unscale_variance,
 )
-from ._uncertainty import attach, check_options
-from .confidence import ONE_SIGMA
-from .errors import DataError, ParameterError
+from ..errors import DataError, ParameterError
 from .result import StabilityResult
 from .taus import select_m
 
-__all__ = ["Statistic", "ScaledPhase", "run", "prepare", "prepare_scaled", "finish"]
+__all__ = [
+    "Statistic", "ScaledPhase", "StreamedSeries", "compute", "prepare", "prepare_scaled", "register_streamed",
+    "streamed",
+]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
 #: averaging factor in ``ms``, from the phase series ``x``.
@@ -74,10 +78,47 @@ class Statistic:
     compute_freq: Optional[Kernel] = None
 
 
-def _is_chunked(data: object) -> bool:
-    """A ChunkedSeries or a dask array: computed piecewise by :mod:`sigmatau.chunked`, never loaded whole."""
-    module = type(data).__module__
-    return module == "sigmatau.chunked" or module.startswith("dask.")
+class StreamedSeries(Protocol):
+    """A record computed piecewise, never loaded whole (:class:`sigmatau.chunked.ChunkedSeries`).
+
+    The statistics reach such a record only through these two methods, the way
+    numpy reaches ``__array_function__``: the core defines the protocol, the
+    scale-out layer implements it. Foreign types (dask arrays) are turned into
+    one by the adapters that layer registers with :func:`register_streamed`.
+    """
+
+    def __sigmatau_statistic__(self, stat: Statistic, **options: Any) -> StabilityResult:
+        """Compute ``stat`` with the options of :func:`sigmatau.stats.engine.run`."""
+
+    def __sigmatau_finish__(self, result: StabilityResult, data_type: str, **options: Any) -> StabilityResult:
+        """Attach noise type, EDF and interval to ``result`` (:func:`sigmatau.stats.engine.finish`)."""
+
+
+_ADAPTERS: list[Callable[[object], Optional[StreamedSeries]]] = []
+
+
+def register_streamed(adapter: Callable[[object], Optional[StreamedSeries]]) -> None:
+    """Register ``adapter(data) -> StreamedSeries or None`` for a foreign record type."""
+    if adapter not in _ADAPTERS:
+        _ADAPTERS.append(adapter)
+
+
+def streamed(data: object) -> Optional[StreamedSeries]:
+    """``data`` as a :class:`StreamedSeries`, or None for in-memory data."""
+    if hasattr(type(data), "__sigmatau_statistic__"):
+        return data  # type: ignore[return-value]
+    if isinstance(data, np.ndarray):  # the common case: no adapter asked
+        return None
+    for adapter in _ADAPTERS:
+        src = adapter(data)
+        if src is not None:
+            return src
+    return None
+
+
+def _refuse_streamed(stat: Statistic, data: object) -> None:
+    if streamed(data) is not None:
+        raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
 
 
 def _offset_free(stat: Statistic, data_type: str) -> bool:
@@ -126,8 +167,7 @@ def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> t
     caller's kernel cannot overflow or underflow: a phase beyond 2**±450
     (≈ 1e±135) is a DataError. :func:`finish` checks the variance again.
     """
-    if _is_chunked(data):
-        raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
+    _refuse_streamed(stat, data)
     series, rate_f, dtype, _, k = _validated(stat, data, rate, data_type)
     x_unit = _phase_of(stat, series, rate_f, dtype)
     with np.errstate(over="ignore", under="ignore"):  # an inf or 0 peak is refused below
@@ -174,13 +214,12 @@ def prepare_scaled(stat: Statistic, data: object, rate: object, data_type: objec
     Every estimator is homogeneous of degree two, var(c·x) = c²·var(x), and a power
     of two changes no digit of the data.
     """
-    if _is_chunked(data):
-        raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
+    _refuse_streamed(stat, data)
     series, rate_f, dtype, _, k = _validated(stat, data, rate, data_type)
     return ScaledPhase(_phase_of(stat, series, rate_f, dtype), rate_f, dtype, k)
 
 
-def run(
+def compute(
     stat: Statistic,
     data: object,
     *,
@@ -189,17 +228,11 @@ def run(
     taus: object,
     m: object,
     points_per_decade: int = 10,
-    alpha: object = None,
-    confidence: object = ONE_SIGMA,
-    ci: object = "chi2",
-    raw: bool = False,
-) -> StabilityResult:
-    """Compute ``stat`` on ``data`` and return its result.
+) -> tuple[StabilityResult, np.ndarray]:
+    """Compute ``stat`` on in-memory ``data``: the raw variance, no noise type or interval.
 
-    The variance is the raw estimator (no bias correction). Unless ``ci`` is
-    None, each row also gets its noise type, EDF and interval
-    (:mod:`sigmatau._uncertainty`); ``raw=True`` skips that step for callers
-    that attach it themselves (after a bias correction, for instance).
+    Returns the result and the validated samples as the kernel saw them (scaled;
+    noise identification is scale-invariant and works on them).
 
     The kernel runs on the data scaled by an exact power of two, 2**-k, into
     [0.5, 1) and the variance is multiplied back by 4**k: every statistic is
@@ -207,14 +240,6 @@ def run(
     while no intermediate square can overflow or underflow. A variance that
     float64 cannot hold is a DataError, never inf or 0.
     """
-    if _is_chunked(data):
-        from .chunked import _run
-
-        result = _run(stat, data, rate=rate, data_type=data_type, taus=taus, m=m,
-                      points_per_decade=points_per_decade, alpha=alpha, confidence=confidence, ci=ci, raw=raw)
-        # chunked._run scales the streamed data by 2**-k and checks the variance itself.
-        return result
-    alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
     given = series
     use_freq = dtype == "freq" and stat.compute_freq is not None
@@ -255,32 +280,4 @@ def run(
         data_type=dtype,
         n_points=int(n_points),
     )
-    if raw:
-        return result
-    # Noise identification is scale-invariant: it gets the scaled samples.
-    return attach(result, given, dtype, alpha=alpha_i, confidence=conf, ci=ci_m,
-                  id_factors=_id_factors(stat, ms))
-
-
-def _id_factors(stat: Statistic, ms: np.ndarray) -> np.ndarray:
-    """Averaging factors at which the noise type is identified: that of the τ reported."""
-    if stat.tau_factor == 1.0:
-        return ms
-    return np.maximum(1, np.round(stat.tau_factor * ms)).astype(np.int64)
-
-
-def finish(result: StabilityResult, data: object, data_type: str, *, alpha: object = None,
-           confidence: object = ONE_SIGMA, ci: object = "chi2",
-           identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
-    """Attach noise type, EDF and interval to a result built with ``run(..., raw=True)``."""
-    if _is_chunked(data):
-        from .chunked import _finish
-
-        return _finish(result, data, data_type, alpha=alpha, confidence=confidence, ci=ci, identified=identified)
-    alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
-    # The variance was computed by the caller's kernel: refuse one float64 could not hold.
-    unscale_variance(result.var, 0, result.statistic)
-    # Scale-invariant noise identification on the scaled samples (no overflow at 1e±300).
-    given, _ = scale_to_unit(as_series(data, remove_offset=True))
-    return attach(result, given, data_type, alpha=alpha_i, confidence=conf, ci=ci_m,
-                  id_factors=None if identified is not None else result.m, identified=identified)
+    return result, given

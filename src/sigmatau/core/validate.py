@@ -12,7 +12,7 @@ from typing import Literal
 
 import numpy as np
 
-from .errors import DataError, ParameterError
+from ..errors import DataError, ParameterError
 
 __all__ = [
     "DataType",

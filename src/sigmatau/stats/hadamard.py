@@ -10,13 +10,16 @@ from typing import Optional
 
 import numpy as np
 
-from ._driver import Statistic, run
-from ._input import DataType
-from ._uncertainty import CiMethod
-from .confidence import ONE_SIGMA
-from ._numeric import sumsq_combination
-from .allan import _block_sums_by_factor, _doc, _window_sums_by_factor
-from .result import StabilityResult
+from ..core.driver import Statistic
+from ..core.taus import STOP_RATIOS
+from .engine import run
+from ..core.validate import DataType
+from ..uncertainty.attach import CiMethod
+from ..uncertainty.confidence import ONE_SIGMA
+from ..core.numeric import sumsq_combination
+from ..core.kernels import block_sums_by_factor, window_sums_by_factor
+from .allan import _doc
+from ..core.result import StabilityResult
 
 __all__ = ["hdev", "ohdev"]
 
@@ -47,7 +50,7 @@ def _ohvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
 def _hvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m, b in _block_sums_by_factor(y, ms):
+    for i, m, b in block_sums_by_factor(y, ms):
         k = b.size - 2
         var[i] = sumsq_combination([(1.0, b[2:]), (-2.0, b[1:-1]), (1.0, b[:-2])], k) / (6.0 * float(m) ** 2 * k)
         n[i] = k
@@ -58,7 +61,7 @@ def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = A_m[j+2m] - 2A_m[j+m] + A_m[j] = Δ³_m x_j / τ0
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m, ws in _window_sums_by_factor(y, ms):
+    for i, m, ws in window_sums_by_factor(y, ms):
         a = ws.a
         k = y.size - 3 * m + 1
         var[i] = sumsq_combination([(1.0, a[2 * m :]), (-2.0, a[m:-m]), (1.0, a[: -2 * m])], k) / (
@@ -68,8 +71,8 @@ def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
-HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=5, min_points=4, compute_freq=_hvar_freq)
-OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=4, min_points=4, compute_freq=_ohvar_freq)
+HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["hdev"], min_points=4, compute_freq=_hvar_freq)
+OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["ohdev"], min_points=4, compute_freq=_ohvar_freq)
 
 
 @_doc

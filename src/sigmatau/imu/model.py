@@ -113,15 +113,15 @@ from typing import Any, Literal, Mapping, NamedTuple, Optional, Sequence, Union
 import numpy as np
 from scipy.special import chdtrc, ndtri
 
-from ._input import as_series, check_rate
-from .allan import oadev
+from ..core.validate import as_series, check_rate
+from ..stats.allan import oadev
 from . import checks as checks_module
 from .checks import DataChecks, check_samples
-from .confidence import ONE_SIGMA, deviation_interval, edf_array
-from .errors import DataError, ParameterError, SigmaTauWarning
-from .generate import octave_flicker, power_law_noise
-from .noiseid import _OCTAVE_CORRELATION
-from .result import StabilityResult
+from ..uncertainty.confidence import ONE_SIGMA, deviation_interval, edf_array
+from ..errors import DataError, ParameterError, SigmaTauWarning
+from ..noise.generate import octave_flicker, power_law_noise
+from ..uncertainty.noiseid import OCTAVE_CORRELATION
+from ..core.result import StabilityResult
 from .units import CUSTOMARY, TERMS, SensorUnit, convert, pretty, sensor_unit, term_unit
 
 __all__ = [
@@ -150,7 +150,7 @@ B_FACTOR = math.sqrt(2.0 * math.log(2.0) / math.pi)
 #: factor from the line's deviation there to the coefficient.
 _SLOPE = {"Q": -1.0, "N": -0.5, "B": 0.0, "K": 0.5, "R": 1.0}
 _READ_TAU = {"Q": math.sqrt(3.0), "N": 1.0, "B": 1.0, "K": 3.0, "R": math.sqrt(2.0)}
-_READ_FACTOR = {"Q": 1.0, "N": 1.0, "B": 1.0 / B_FACTOR, "K": 1.0, "R": 1.0}
+READ_FACTOR = {"Q": 1.0, "N": 1.0, "B": 1.0 / B_FACTOR, "K": 1.0, "R": 1.0}
 #: Power-law exponent α of each term (for the EDF and the τ-correlation model).
 _ALPHA = {"Q": 2, "N": 0, "B": -1, "K": -2, "R": -2}
 _NAMES = {"Q": "quantization", "N": "white noise (angle/velocity random walk)",
@@ -605,7 +605,7 @@ class NoiseModel:
         """Readable table: each term in the input unit, SI and customary units, and its read-off."""
         sensor = "gyroscope" if self.kind == "gyro" else "accelerometer"
         head = (f"IMU noise model: {sensor}, samples in {pretty(self.unit)} at {self.rate:g} Hz,"
-                f" {self.n_samples} samples ({_duration(self.duration)}); OADEV τ {self.result.taus[0]:.3g}"
+                f" {self.n_samples} samples ({format_duration(self.duration)}); OADEV τ {self.result.taus[0]:.3g}"
                 f"–{self.result.taus[-1]:.3g} s; {100 * self.confidence:.1f} % intervals;"
                 f" fit terms: {', '.join(self.fit_terms) or 'none'}")
         rows = [["term", "value (" + ("fit" if self.fit else "read-off") + ")", "SI", "customary",
@@ -639,7 +639,7 @@ def _short(p: Parameter) -> str:
     return f"{p.value:.4g} {pretty(p.unit)}"
 
 
-def _duration(seconds: float) -> str:
+def format_duration(seconds: float) -> str:
     if seconds >= 3600:
         return f"{seconds / 3600:.3g} h"
     if seconds >= 60:
@@ -1100,7 +1100,7 @@ def _readoffs(taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su
                 s = gain_pt / np.sqrt(2.0 * nu[idx])
                 var_ln = float(w @ (corr * np.outer(s, s)) @ w)
             nu_eff = 1.0 / (2.0 * var_ln)
-            value = math.exp(level) * _READ_FACTOR[term]
+            value = math.exp(level) * READ_FACTOR[term]
             lo, hi = deviation_interval(value, nu_eff, conf)
             if corrected:
                 allowance = 0.0
@@ -1132,7 +1132,7 @@ def _readoffs(taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su
             p_pt = 1.0 - (1.0 - conf) / (2.0 * max(k, 1))
             if ok.any():
                 _, hi = deviation_interval(dev[ok], nu[ok], p_pt, sided="upper")
-                mapped = np.asarray(hi) * np.exp(s0 * (math.log(tr) - lt[ok])) * _READ_FACTOR[term]
+                mapped = np.asarray(hi) * np.exp(s0 * (math.log(tr) - lt[ok])) * READ_FACTOR[term]
                 j = int(np.argmin(mapped))
                 bound, where = float(mapped[j]), float(taus[ok][j])
             rule = (f"no region of slope {s0:+g} spanning {_MIN_SPAN[term] / math.log(2):g} octave(s) in"
@@ -1177,7 +1177,7 @@ def _correlation(taus: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     ``ρ_ij = exp(−|L_i − L_j|^1.5)``: a stationary positive-definite kernel
     in L, so the matrix is a valid correlation matrix.
     """
-    rho = np.array([_OCTAVE_CORRELATION[max(-2, min(0, int(a)))] for a in alpha])
+    rho = np.array([OCTAVE_CORRELATION[max(-2, min(0, int(a)))] for a in alpha])
     step = np.maximum(rho[:-1], rho[1:])
     rate = (-np.log(step)) ** (1.0 / _CORR_POWER)
     coord = np.concatenate(([0.0], np.cumsum(rate * np.diff(np.log2(taus)))))

@@ -48,15 +48,15 @@ def _num(v: Any, fmt: str = ".4g") -> str:
 
 
 def _pretty(unit: str) -> str:
-    from .units import pretty
+    from ..imu.units import pretty
 
     return pretty(unit) if unit else ""
 
 
 def _param(p: Any) -> str:
-    from .analysis import _fmt_param
+    from ..pipeline.analysis import format_parameter
 
-    return _e(_fmt_param(p))
+    return _e(format_parameter(p))
 
 
 def _input_section(a: Any) -> str:

@@ -22,8 +22,8 @@ from typing import Literal, Optional
 import numpy as np
 
 from .confidence import EDF_STATISTICS, deviation_interval, edf_array
-from .errors import DataError, ParameterError
-from .result import StabilityResult
+from ..errors import DataError, ParameterError
+from ..core.result import StabilityResult
 
 __all__ = ["CI_METHODS", "SINGLE_SIDED_EDF", "attach", "check_options"]
 

@@ -27,13 +27,24 @@ from typing import Literal, Union
 
 import numpy as np
 
-from .errors import ParameterError, RangeWarning
+from ..errors import ParameterError, RangeWarning
 
-__all__ = ["TauGrid", "TAU_GRIDS", "m_grid", "select_m", "long_factors_expected"]
+__all__ = ["TauGrid", "TAU_GRIDS", "STOP_RATIOS", "m_grid", "select_m", "long_factors_expected"]
 
 TauGrid = Literal["octave", "decade", "all", "log"]
 TAU_GRIDS: tuple[str, ...] = ("octave", "decade", "all", "log")
 TausArg = Union[str, "np.typing.ArrayLike"]
+
+#: Stable32 stop ratios of the Allan, Hadamard and total families: keyword grids end
+#: at m ≤ ⌊N/stop⌋ (W. J. Riley, "The evolution of frequency stability analysis
+#: software", Table III). Noise identification reads them too: Stable32 applies B1
+#: down to 2·stop averages (:func:`sigmatau.noiseid.b1_min_averages`). The Theo
+#: family (1) and the TIE statistics keep theirs with their definitions.
+STOP_RATIOS: dict[str, float] = {
+    "stdev": 5, "adev": 5, "hdev": 5,
+    "ostdev": 4, "oadev": 4, "mdev": 4, "tdev": 4, "ohdev": 4,
+    "totdev": 2, "mtotdev": 3, "ttotdev": 3, "htotdev": 3,
+}
 
 # A context variable, not warnings.catch_warnings: the warning filters are
 # process-wide, so a catch_warnings block in one worker thread (compute_channels)
@@ -146,7 +157,7 @@ def select_m(
     elif isinstance(taus, str):
         return m_grid(taus, default_max, m_min=m_min, even=even, points_per_decade=points_per_decade)
     else:
-        t = np.atleast_1d(np.asarray(taus, dtype=float)) if _is_numeric(taus) else None
+        t = np.atleast_1d(np.asarray(taus, dtype=float)) if is_numeric(taus) else None
         if t is None or t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(t <= 0):
             raise ParameterError(
                 f"taus={taus!r} must be one of {TAU_GRIDS} or a 1-D array of positive τ in seconds"
@@ -181,7 +192,7 @@ def select_m(
     return ms
 
 
-def _is_numeric(obj: object) -> bool:
+def is_numeric(obj: object) -> bool:
     try:
         arr = np.asarray(obj)
     except Exception:

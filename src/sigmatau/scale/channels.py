@@ -13,9 +13,9 @@ from typing import Callable, Mapping, Optional, Union
 
 import numpy as np
 
-from ._input import as_series
-from .errors import DataError, ParameterError
-from .result import StabilityResult
+from ..core.validate import as_series
+from ..errors import DataError, ParameterError
+from ..core.result import StabilityResult
 
 __all__ = ["compute_channels"]
 

@@ -31,15 +31,17 @@ from typing import Literal, Optional
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
-from ._driver import Statistic, finish, run
-from ._numeric import sumsq
-from ._uncertainty import CiMethod, check_options
-from .confidence import ONE_SIGMA
-from ._input import DataType
+from ..core.driver import Statistic
+from ..core.taus import STOP_RATIOS
+from .engine import finish, run
+from ..core.numeric import sumsq
+from ..uncertainty.attach import CiMethod, check_options
+from ..uncertainty.confidence import ONE_SIGMA
+from ..core.validate import DataType
 from .allan import _doc
-from .errors import ParameterError
+from ..errors import ParameterError
 from .hadamard import _ohvar_kernel
-from .result import StabilityResult
+from ..core.result import StabilityResult
 
 __all__ = ["totdev", "mtotdev", "ttotdev", "htotdev"]
 
@@ -476,10 +478,10 @@ def _htot_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray
     return var, n
 
 
-TOTVAR = Statistic("totdev", _totvar_kernel, max_m=lambda n: n - 1, stop_ratio=2, min_points=3)
-MTOT = Statistic("mtotdev", _mtot_kernel, max_m=lambda n: n // 3, stop_ratio=3, min_points=3)
-TTOT = Statistic("ttotdev", _ttot_kernel, max_m=lambda n: n // 3, stop_ratio=3, min_points=3)
-HTOT = Statistic("htotdev", _htot_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=3, min_points=4)
+TOTVAR = Statistic("totdev", _totvar_kernel, max_m=lambda n: n - 1, stop_ratio=STOP_RATIOS["totdev"], min_points=3)
+MTOT = Statistic("mtotdev", _mtot_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["mtotdev"], min_points=3)
+TTOT = Statistic("ttotdev", _ttot_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["ttotdev"], min_points=3)
+HTOT = Statistic("htotdev", _htot_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["htotdev"], min_points=4)
 
 
 # --- bias corrections ------------------------------------------------------------

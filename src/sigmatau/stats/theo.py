@@ -21,18 +21,20 @@ from typing import Literal, Optional
 import numpy as np
 from scipy import fft as _fft
 
-from . import _driver
-from ._driver import Statistic, finish, run
-from ._input import unscale_variance
-from ._numeric import CHUNK, dot
-from ._input import DataType
-from ._uncertainty import CiMethod, check_options
-from .allan import _doc, _oavar_kernel
-from .confidence import ONE_SIGMA
-from .noiseid import theo_noise_id
-from .errors import DataError, ParameterError, RangeWarning
-from .result import StabilityResult
-from .taus import TAU_GRIDS, _is_numeric, m_grid, select_m
+from ..core import driver as _driver
+from ..core.driver import Statistic
+from .engine import finish, run
+from ..core.validate import unscale_variance
+from ..core.numeric import CHUNK, dot
+from ..core.validate import DataType
+from ..uncertainty.attach import CiMethod, check_options
+from ..core.kernels import oavar_kernel
+from .allan import _doc
+from ..uncertainty.confidence import ONE_SIGMA
+from ..uncertainty.noiseid import theo_noise_id
+from ..errors import DataError, ParameterError, RangeWarning
+from ..core.result import StabilityResult
+from ..core.taus import TAU_GRIDS, is_numeric, m_grid, select_m
 
 __all__ = ["theo1", "theobr", "theoh", "theobr_kappa", "theoh_split", "TheoBRKappa", "KAPPA_FAST_POINTS"]
 
@@ -582,7 +584,7 @@ def _kappa_exact(x: np.ndarray, n: Optional[int] = None) -> TheoBRKappa:
     _check_kappa_points(N)
     n = N // 30 - 3 if n is None else n
     i = np.arange(n + 1)
-    oavar, _ = _oavar_kernel(x, 9 + 3 * i, 1.0)
+    oavar, _ = oavar_kernel(x, 9 + 3 * i, 1.0)
     theo, _ = _theo1_kernel(x, 12 + 4 * i, 1.0)
     if np.all(theo <= 0.0) and np.all(oavar <= 0.0):
         # A straight phase line (constant frequency): every variance is zero and so is
@@ -957,7 +959,7 @@ def _theoh_factors(
                     f"theoh: TheoBR part (m ≥ {m_lo}) needs even averaging factors, got m={odd.tolist()}"
                 )
             return req[req < k], req[req >= m_lo]
-        t = np.atleast_1d(np.asarray(taus, dtype=float)) if _is_numeric(taus) else None
+        t = np.atleast_1d(np.asarray(taus, dtype=float)) if is_numeric(taus) else None
         if t is None or t.ndim != 1 or t.size == 0 or not np.all(np.isfinite(t)) or np.any(t <= 0):
             raise ParameterError(
                 f"taus={taus!r} must be one of {TAU_GRIDS} or a 1-D array of positive τ in seconds"
@@ -1050,7 +1052,7 @@ def theoh(
     tau0 = 1.0 / rate_f
     ma, mb = _theoh_factors(N, rate_f, taus, m, points_per_decade)
     kap = _kappa(x, method)
-    va, na = _oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
+    va, na = oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
     vb, nb = _theo1_kernel(x, mb, tau0) if mb.size else (np.empty(0), np.empty(0, dtype=np.int64))
     var = np.concatenate((np.asarray(va, dtype=float), kap.kappa * vb))
     var = unscale_variance(np.where(var < 0.0, 0.0, var), p.exponent, "theoh")

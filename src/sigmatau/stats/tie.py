@@ -12,13 +12,14 @@ from typing import Optional
 
 import numpy as np
 
-from ._driver import Statistic, run
-from . import _numeric
-from ._input import DataType
-from ._uncertainty import CiMethod
+from ..core.driver import Statistic
+from .engine import run
+from ..core import numeric as _numeric
+from ..core.validate import DataType
+from ..uncertainty.attach import CiMethod
 from .allan import _doc
-from .confidence import ONE_SIGMA
-from .result import StabilityResult
+from ..uncertainty.confidence import ONE_SIGMA
+from ..core.result import StabilityResult
 
 __all__ = ["mtie", "tierms"]
 

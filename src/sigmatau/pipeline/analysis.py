@@ -1,0 +1,625 @@
+"""The main job: every statistic, the noise types and the IMU model of every channel of a log.
+
+:func:`analyze_log` takes a :class:`~sigmatau.io.SensorLog` (from
+:func:`sigmatau.io.read` or built in memory) and returns a :class:`LogAnalysis`:
+per channel the chosen statistics with noise type, EDF and interval at every τ,
+and — for gyroscope and accelerometer channels with a known unit — the IMU noise
+model (:func:`sigmatau.imu.analyze`), a comparison with datasheet figures, and
+the Kalibr entry of the whole IMU. :mod:`sigmatau.outputs` writes it to a
+directory; the ``sigmatau analyze`` command does both.
+
+It only calls the public API; nothing here computes a statistic of its own.
+
+Examples
+--------
+>>> import numpy as np
+>>> from sigmatau.analysis import analyze_log, log_from_arrays
+>>> from sigmatau.imu import simulate
+>>> gx = simulate("euroc-gyro", duration=600.0, rng=1)
+>>> log = log_from_arrays({"gyro_x": gx}, rate=200.0, units={"gyro_x": "rad/s"})
+>>> a = analyze_log(log, statistics=("oadev", "mdev"))
+>>> ch = a.channel("gyro_x")
+>>> sorted(ch.results), ch.model.N.resolved
+(['mdev', 'oadev'], True)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import os
+import time
+import warnings
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import Any, Callable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from .._version import __version__
+from ..uncertainty.confidence import ONE_SIGMA
+from ..errors import DataError, ParameterError, SigmaTauError
+from ..core.result import StabilityResult
+
+__all__ = [
+    "DEFAULT_STATISTICS",
+    "STATISTICS",
+    "TERMS",
+    "ChannelAnalysis",
+    "LogAnalysis",
+    "analyze_log",
+    "log_from_arrays",
+    "datasheet_reference",
+    "json_ready",
+]
+
+#: Statistics computed by default (the issue's choice: the overlapping and
+#: modified Allan deviations, the time deviation, the overlapping Hadamard
+#: deviation, the total deviation and TheoH, each where the record allows).
+DEFAULT_STATISTICS = ("oadev", "mdev", "tdev", "ohdev", "totdev", "theoh")
+
+#: Statistics :func:`analyze_log` can compute.
+STATISTICS = ("stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev",
+              "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms")
+
+#: Groups whose channels get an IMU noise model.
+IMU_GROUPS = ("gyro", "accel")
+
+#: Terms of the IMU model, in order.
+TERMS = ("Q", "N", "B", "K", "R")
+
+#: SI unit of each term, per sensor kind (what presets are given in).
+SI_TERM_UNITS = {
+    "gyro": {"Q": "rad", "N": "rad/s/sqrt(Hz)", "B": "rad/s", "K": "rad/s^2/sqrt(Hz)", "R": "rad/s^2"},
+    "accel": {"Q": "m/s", "N": "m/s^2/sqrt(Hz)", "B": "m/s^2", "K": "m/s^3/sqrt(Hz)", "R": "m/s^3"},
+}
+
+Reference = Mapping[str, Mapping[str, "tuple[float, str]"]]
+
+
+@dataclass(frozen=True)
+class ChannelAnalysis:
+    """Everything computed for one channel.
+
+    Attributes
+    ----------
+    name, group, unit : str
+        Channel name, its group ("gyro", "accel", "freq", "phase", "other" …)
+        and the unit of its samples ("" when unknown).
+    n_samples : int
+    results : mapping of str to StabilityResult
+        Statistic name → result, in the order asked for.
+    skipped : mapping of str to str
+        Statistic name → why it was not computed (record too short …).
+    model : NoiseModel or None
+        The IMU noise model (gyro and accel channels with a known unit).
+    model_note : str
+        Why there is no model, when there is none.
+    datasheet : tuple of dict
+        Datasheet comparison rows (:meth:`sigmatau.imu.NoiseModel.compare`).
+    seconds : float
+        Wall time spent on the channel.
+    """
+
+    name: str
+    group: str
+    unit: str
+    n_samples: int
+    results: Mapping[str, StabilityResult]
+    skipped: Mapping[str, str]
+    model: Any = None
+    model_note: str = ""
+    datasheet: tuple[dict, ...] = ()
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (NaN and inf as None)."""
+        return json_ready({
+            "name": self.name, "group": self.group, "unit": self.unit, "n_samples": self.n_samples,
+            "statistics": {k: r.to_dict() for k, r in self.results.items()},
+            "skipped": dict(self.skipped),
+            "model": self.model.to_dict() if self.model is not None else None,
+            "model_note": self.model_note,
+            "datasheet": list(self.datasheet),
+            "seconds": self.seconds,
+        })
+
+
+@dataclass(frozen=True)
+class LogAnalysis:
+    """The analysis of one log (see :func:`analyze_log`).
+
+    Attributes
+    ----------
+    log : SensorLog
+        The log analysed (the segment, when the log was split at gaps).
+    channels : tuple of ChannelAnalysis
+    settings : dict
+        Every setting that shaped the result.
+    kalibr : dict or None
+        :func:`sigmatau.imu.kalibr_config` of the gyro and accel models.
+    kalibr_note : str
+        Why there is no Kalibr entry, when there is none.
+    notes : tuple of str
+        What was done to the data on the way (segment chosen …).
+    warnings : tuple of str
+        Warnings issued during the analysis, each once (those of the IMU model
+        are in each model's ``flags``).
+    version : str
+        sigmatau version.
+    seconds : float
+        Wall time of the analysis.
+    """
+
+    log: Any
+    channels: tuple[ChannelAnalysis, ...]
+    settings: Mapping[str, Any]
+    kalibr: Optional[dict] = None
+    kalibr_note: str = ""
+    notes: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()
+    version: str = __version__
+    seconds: float = 0.0
+
+    def channel(self, name: str) -> ChannelAnalysis:
+        """The analysis of one channel by name."""
+        for ch in self.channels:
+            if ch.name == name:
+                return ch
+        raise ParameterError(f"no channel {name!r}; channels are: {', '.join(c.name for c in self.channels)}")
+
+    def groups(self) -> dict[str, list[ChannelAnalysis]]:
+        """Channels by group, in log order."""
+        out: dict[str, list[ChannelAnalysis]] = {}
+        for ch in self.channels:
+            out.setdefault(ch.group, []).append(ch)
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary of everything (NaN and inf as None)."""
+        return json_ready({
+            "tool": {"name": "sigmatau", "version": self.version},
+            "input": {"path": self.log.source.path, "format": self.log.source.format,
+                      "sha256": self.log.source.sha256, "size": self.log.source.size,
+                      "topic": self.log.source.topic},
+            "log": self.log.to_dict(),
+            "settings": dict(self.settings),
+            "notes": list(self.notes),
+            "warnings": list(self.warnings),
+            "channels": [c.to_dict() for c in self.channels],
+            "kalibr": self.kalibr,
+            "kalibr_note": self.kalibr_note,
+            "seconds": self.seconds,
+        })
+
+    def summary(self) -> str:
+        """Terminal summary: data checks, then per channel the model (SI and customary units) and flags."""
+        log = self.log
+        from ..imu.model import format_duration
+
+        lines = [f"sigmatau {self.version}: {log.source.path} ({log.source.format}), {len(log.channels)} channel(s)"
+                 f" × {len(log)} samples at {log.rate:.6g} Hz ({format_duration(len(log) / log.rate)})"]
+        lines.append("timing: " + log.timing.summary().replace("\n", "\n  "))
+        lines += [f"note: {n}" for n in self.notes]
+        for ch in self.channels:
+            lines.append("")
+            got = ", ".join(ch.results) or "none"
+            lines.append(f"[{ch.name}] {ch.group}, unit {ch.unit or '?'}: statistics {got}")
+            for stat, why in ch.skipped.items():
+                lines.append(f"  {stat}: not computed — {why}")
+            if ch.model is not None:
+                lines.append(_model_lines(ch.model))
+            elif ch.model_note:
+                lines.append(f"  no IMU model: {ch.model_note}")
+            for row in ch.datasheet:
+                verdict = "covers" if row["covers"] else "does not cover"
+                lines.append(f"  datasheet {row['term']} = {row['reference_given']}: interval {verdict} it"
+                             + (f" (ratio {row['ratio']:.3g})" if row.get("ratio") else ""))
+        if self.kalibr is not None:
+            k = self.kalibr
+            lines.append("")
+            lines.append(f"Kalibr imu.yaml ({k['axis_rule']}): gyroscope_noise_density"
+                         f" {k['gyroscope_noise_density']:.4g}, gyroscope_random_walk {k['gyroscope_random_walk']:.4g},"
+                         f" accelerometer_noise_density {k['accelerometer_noise_density']:.4g},"
+                         f" accelerometer_random_walk {k['accelerometer_random_walk']:.4g}")
+            if k["bounds_used"]:
+                lines.append("  upper bounds used (not resolved): " + ", ".join(k["bounds_used"]))
+            if k.get("axes_note"):
+                lines.append(f"  fewer than three axes: {k['axes_note']}")
+        elif self.kalibr_note:
+            lines.append("")
+            lines.append(f"no Kalibr imu.yaml: {self.kalibr_note}")
+        if self.warnings:
+            lines.append("")
+            lines.append("warnings:")
+            lines += [f"  - {w}" for w in self.warnings]
+        return "\n".join(lines)
+
+
+def _model_lines(model: Any) -> str:
+    """The model as indented lines: each term in SI and customary units, then the flags."""
+    out = []
+    for t in TERMS:
+        p = getattr(model, t)
+        si = p.si()
+        cust = "; ".join(format_parameter(c) for c in p.customary())
+        out.append(f"  {t} {_TERM_NAMES[model.kind][t]:<26} {format_parameter(si):<44} {cust}")
+    for f in model.flags:
+        out.append(f"  ! [{f.code}{' ' + f.term if f.term else ''}] {f.message}")
+    return "\n".join(out)
+
+
+_TERM_NAMES = {
+    "gyro": {"Q": "(angle quantisation)", "N": "(angle random walk)", "B": "(bias instability)",
+             "K": "(rate random walk)", "R": "(rate ramp)"},
+    "accel": {"Q": "(velocity quantisation)", "N": "(velocity random walk)", "B": "(bias instability)",
+              "K": "(acceleration random walk)", "R": "(acceleration ramp)"},
+}
+
+
+def format_parameter(p: Any) -> str:
+    """``value [low, high] unit``, ``< bound unit`` when not resolved (terminal and report)."""
+    from ..imu.units import pretty
+
+    if not p.resolved:
+        return f"< {p.high:.3g} {pretty(p.unit)}" if math.isfinite(p.high) else "not resolved"
+    return f"{p.value:.4g} [{p.low:.4g}, {p.high:.4g}] {pretty(p.unit)}"
+
+
+# ----------------------------------------------------------------------- helpers
+
+
+def json_ready(obj: Any) -> Any:
+    """``obj`` with numpy scalars/arrays as Python values and NaN/inf as None (strict JSON)."""
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_ready(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if obj is None or isinstance(obj, str):
+        return obj
+    return str(obj)
+
+
+def log_from_arrays(channels: Mapping[str, Any], *, rate: float, units: Optional[Mapping[str, str]] = None,
+                    groups: Optional[Mapping[str, Sequence[str]]] = None, data_type: str = "freq",
+                    name: str = "<memory>") -> Any:
+    """A :class:`~sigmatau.io.SensorLog` from arrays already in memory (simulations, notebooks).
+
+    Parameters
+    ----------
+    channels : mapping of str to array_like
+        Samples per channel, all of the same length. Channels named ``gyro_*``
+        and ``accel_*`` are grouped as gyro and accel unless ``groups`` says
+        otherwise.
+    rate : float
+        Sample rate in Hz.
+    units : mapping of str to str, optional
+        Unit per channel.
+    groups : mapping, optional
+        Group → channel names.
+    data_type : {"freq", "phase"}
+    name : str
+        Shown as the log's source path.
+    """
+    from ..core.validate import check_rate
+    from ..io import Source, SensorLog, TimingReport
+
+    rate_f = check_rate(rate)
+    if not channels:
+        raise DataError("no channels given")
+    arrays = {str(k): np.asarray(v, dtype=np.float64) for k, v in channels.items()}
+    sizes = {a.shape for a in arrays.values()}
+    if len(sizes) != 1 or len(next(iter(sizes))) != 1:
+        raise DataError(f"every channel must be one-dimensional and of the same length, got shapes {sorted(sizes)}")
+    if groups is None:
+        grp: dict[str, list[str]] = {}
+        for k in arrays:
+            g = k.split("_")[0] if k.split("_")[0] in IMU_GROUPS else ("other" if data_type == "freq" else "phase")
+            grp.setdefault(g, []).append(k)
+        groups = grp
+    n = next(iter(arrays.values())).size
+    digest = hashlib.sha256()
+    for a in arrays.values():
+        digest.update(np.ascontiguousarray(a).tobytes())
+    units = dict(units or {})
+    return SensorLog(
+        channels=arrays, rate=rate_f, timestamps=None,
+        groups={g: tuple(v) for g, v in groups.items()},
+        units={k: units.get(k, "") for k in arrays},
+        data_type=data_type,  # type: ignore[arg-type]
+        source=Source(path=name, format="memory", sha256=digest.hexdigest(), size=int(n * 8 * len(arrays)),
+                      detail="arrays in memory", columns=tuple(arrays)),
+        timing=TimingReport(samples=n, rows=n, rate=rate_f, rate_source="declared"),
+        unit_origin={k: ("declared" if units.get(k) else "") for k in arrays},
+    )
+
+
+def datasheet_reference(spec: Union[str, Mapping[str, Any], None]) -> dict[str, dict[str, tuple[float, str]]]:
+    """Datasheet figures by group: ``{"gyro": {"N": (value, unit)}, "accel": {...}}``.
+
+    Parameters
+    ----------
+    spec : str or mapping or None
+        A part with presets in :data:`sigmatau.imu.PRESETS` (``"lsm6dsl"``,
+        ``"lsm6dsm"``, ``"adis16448"``, ``"euroc"``) — the preset's non-zero
+        terms in SI — or a mapping group → term → ``(value, unit)`` or a
+        string ``"value unit"``.
+    """
+    from ..imu.model import PRESETS
+
+    if spec is None:
+        return {}
+    if isinstance(spec, str):
+        key = spec.strip().lower()
+        found = {g: PRESETS[f"{key}-{g}"] for g in IMU_GROUPS if f"{key}-{g}" in PRESETS}
+        if not found:
+            parts = sorted({k.rsplit("-", 1)[0] for k in PRESETS})
+            raise ParameterError(f"unknown datasheet {spec!r}; known parts: {', '.join(parts)}")
+        return {g: {t: (float(getattr(p, t)), SI_TERM_UNITS[g][t]) for t in TERMS if getattr(p, t) > 0}
+                for g, p in found.items()}
+    out: dict[str, dict[str, tuple[float, str]]] = {}
+    for group, terms in spec.items():
+        if group not in IMU_GROUPS:
+            raise ParameterError(f"datasheet group {group!r} must be 'gyro' or 'accel'")
+        out[group] = {}
+        for term, value in terms.items():
+            if term not in TERMS:
+                raise ParameterError(f"datasheet term {term!r} must be one of {', '.join(TERMS)}")
+            out[group][term] = _value_unit(value, f"{group}.{term}")
+    return out
+
+
+def _value_unit(value: Any, what: str) -> tuple[float, str]:
+    from ..imu.units import convert
+
+    if isinstance(value, str):
+        text = value.strip()
+        num, _, unit = text.partition(" ")
+        try:
+            v = float(num)
+        except ValueError:
+            raise ParameterError(f"datasheet {what}={value!r} must be 'value unit', e.g. '4 mdps/sqrt(Hz)'") from None
+        value = (v, unit.strip())
+    try:
+        v, unit = float(value[0]), str(value[1])
+    except (TypeError, ValueError, IndexError):
+        raise ParameterError(f"datasheet {what}={value!r} must be (value, unit)") from None
+    if not math.isfinite(v) or v <= 0:
+        raise ParameterError(f"datasheet {what}={value!r}: the value must be positive")
+    try:
+        convert(1.0, unit, unit)
+    except SigmaTauError:
+        raise ParameterError(f"datasheet {what}: unknown unit {unit!r}") from None
+    return v, unit
+
+
+# ----------------------------------------------------------------------- analysis
+
+
+def check_statistics(statistics: Sequence[str]) -> tuple[str, ...]:
+    if isinstance(statistics, str):
+        statistics = [s for s in statistics.replace(" ", "").split(",") if s]
+    out = []
+    for s in statistics:
+        name = str(s).strip().lower()
+        if name not in STATISTICS:
+            raise ParameterError(f"unknown statistic {s!r}; choose from {', '.join(STATISTICS)}")
+        if name not in out:
+            out.append(name)
+    if not out:
+        raise ParameterError("no statistic chosen")
+    return tuple(out)
+
+
+def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
+             reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool) -> ChannelAnalysis:
+    from ..imu import model as imu
+    from ..stats import FUNCTIONS
+    from ..imu.units import sensor_unit
+
+    t0 = time.perf_counter()
+    x = log[name]
+    group = log.group_of(name)
+    unit = log.units.get(name, "")
+    model = None
+    note = ""
+    if model_wanted and group in IMU_GROUPS:
+        try:
+            su = sensor_unit(unit)
+        except SigmaTauError:
+            su = None
+        if su is None or su.kind != group:
+            note = f"unit {unit!r} is not a known {group} unit; declare it (--{group}-unit)"
+        elif log.data_type != "freq":
+            note = "the IMU model needs rate/specific-force samples, not phase data"
+        else:
+            try:
+                model = imu.analyze(x, rate=log.rate, unit=su.name, taus=taus, confidence=confidence)
+            except DataError as exc:
+                note = str(exc)
+            except (ArithmeticError, np.linalg.LinAlgError) as exc:
+                # The fit's linear algebra fails on data far from unit scale (an SVD that does
+                # not converge at 1e-100): the statistics stand, the model is skipped with why.
+                note = f"IMU model not fitted: numerical failure in the fit ({type(exc).__name__}: {exc})"
+    elif model_wanted:
+        note = f"{group} channel: the IMU model applies to gyro and accel channels"
+    results: dict[str, StabilityResult] = {}
+    skipped: dict[str, str] = {}
+    for stat in statistics:
+        if stat == "oadev" and model is not None:
+            results[stat] = model.result  # the very curve the model was fitted on
+            continue
+        try:
+            results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
+                                                    confidence=confidence)
+        except DataError as exc:
+            skipped[stat] = str(exc)
+    rows: tuple[dict, ...] = ()
+    if model is not None and reference.get(group):
+        rows = tuple(model.compare(reference[group]))
+    return ChannelAnalysis(name=name, group=group, unit=unit, n_samples=int(x.size), results=results,
+                           skipped=skipped, model=model, model_note=note, datasheet=rows,
+                           seconds=time.perf_counter() - t0)
+
+
+def _nothing_computed(n_samples: int, channel: ChannelAnalysis) -> str:
+    """One line saying why no statistic could be computed, each distinct reason once."""
+    by_reason: dict[str, list[str]] = {}
+    for stat, reason in channel.skipped.items():
+        # The statistics' own messages often start with their name: group on the rest.
+        tail = reason[len(stat) + 2:] if reason.startswith(f"{stat}: ") else reason
+        by_reason.setdefault(tail, []).append(stat)
+    why = "; ".join(f"{', '.join(stats)}: {tail}" for tail, stats in by_reason.items())
+    if all("at least" in r for r in channel.skipped.values()):
+        return f"too few samples for any statistic ({n_samples} samples; {why})"
+    return f"no statistic could be computed for channel {channel.name!r} ({n_samples} samples): {why}"
+
+
+def analyze_log(
+    log: Any,
+    *,
+    statistics: Union[str, Sequence[str]] = DEFAULT_STATISTICS,
+    channels: Optional[Sequence[str]] = None,
+    taus: Any = "octave",
+    confidence: float = ONE_SIGMA,
+    model: bool = True,
+    axis_rule: str = "max",
+    inflate: float = 1.0,
+    rostopic: str = "/imu0",
+    datasheet: Union[str, Mapping[str, Any], None] = None,
+    workers: Optional[int] = None,
+    progress: Optional[Callable[[str], None]] = None,
+) -> LogAnalysis:
+    """Compute the statistics, noise types and IMU model of every channel of a log.
+
+    Parameters
+    ----------
+    log : SensorLog
+        From :func:`sigmatau.io.read` or :func:`log_from_arrays`. A log read
+        with ``gaps="split"`` is analysed on its longest gap-free segment (the
+        statistics need evenly spaced samples); a note says which.
+    statistics : sequence of str or str
+        Names from :data:`STATISTICS` (comma-separated string accepted);
+        default :data:`DEFAULT_STATISTICS`. A statistic the record is too
+        short for is skipped with the reason.
+    channels : sequence of str, optional
+        Channels to analyse (default all).
+    taus : str or array_like
+        τ grid of every statistic (default octave).
+    confidence : float
+        Two-sided coverage of every interval (default ±1σ, 0.683).
+    model : bool
+        Fit the IMU model to gyro and accel channels.
+    axis_rule : {"max", "rms", "mean"}
+        How the three axes combine into the Kalibr values (default the largest).
+    inflate : float
+        Inflation factor of the Kalibr values (recorded).
+    rostopic : str
+        ``rostopic`` of the Kalibr entry.
+    datasheet : str or mapping, optional
+        Figures to compare with (:func:`datasheet_reference`).
+    workers : int, optional
+        Channels analysed at once (threads; default the usable cores).
+    progress : callable, optional
+        Called with a line of text as each channel finishes.
+
+    Returns
+    -------
+    LogAnalysis
+
+    Notes
+    -----
+    Each statistic is the public function of that name (``sigmatau.oadev`` …)
+    with ``ci="chi2"``: noise type identified per τ, Greenhall/SP1065 EDF and
+    χ² interval (numerics.md §5, §7). The model is :func:`sigmatau.imu.analyze`
+    and its OADEV curve is the one reported as ``oadev``.
+    """
+    from ..imu.model import kalibr_config
+
+    t0 = time.perf_counter()
+    stats = check_statistics(statistics)
+    if axis_rule not in ("max", "rms", "mean"):
+        raise ParameterError(f"axis_rule={axis_rule!r} must be 'max', 'rms' or 'mean'")
+    if not isinstance(confidence, (int, float)) or isinstance(confidence, bool) or not 0 < confidence < 1:
+        raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
+    reference = datasheet_reference(datasheet)
+    notes: list[str] = []
+    if log.timing.gaps and log.timing.gaps_policy == "split":
+        segments = log.segments(min_samples=2)
+        if not segments:
+            raise DataError("no gap-free segment of at least 2 samples")
+        best = max(range(len(segments)), key=lambda i: len(segments[i]))
+        seg = segments[best]
+        notes.append(f"split at {len(log.timing.gaps)} gap(s) into {len(segments)} segments; analysed the"
+                     f" longest, segment {best + 1} ({len(seg)} of {len(log)} samples)")
+        log = seg
+    names = list(log.names) if channels is None else [str(c) for c in channels]
+    for n in names:
+        log[n]  # one-line error naming the channels that exist
+    if not names:
+        raise DataError("the log has no channels")
+    if workers is None:
+        workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ParameterError(f"workers={workers!r} must be a positive integer")
+    workers = min(workers, len(names))
+
+    def one(name: str) -> ChannelAnalysis:
+        ch = _channel(log, name, stats, taus, float(confidence), reference, model)
+        if progress is not None:
+            progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
+        return ch
+
+    # Warnings from the worker threads reach this (process-wide) recorder too.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        if workers == 1:
+            done = [one(n) for n in names]
+        else:
+            with ThreadPoolExecutor(max_workers=workers, thread_name_prefix="sigmatau") as pool:
+                done = list(pool.map(one, names))
+    if not any(c.results for c in done):
+        raise DataError(_nothing_computed(len(log), done[0]))
+    from ..imu.model import ImuWarning
+
+    seen: list[str] = []
+    for w in caught:
+        if issubclass(w.category, ImuWarning):  # already in the model's flags, with their channel
+            continue
+        text = f"{w.category.__name__}: {w.message}"
+        if text not in seen:
+            seen.append(text)
+
+    kalibr = None
+    kalibr_note = ""
+    gyro = [c.model for c in done if c.group == "gyro" and c.model is not None]
+    accel = [c.model for c in done if c.group == "accel" and c.model is not None]
+    if gyro and accel:
+        kalibr = kalibr_config(gyro=gyro, accel=accel, rule=axis_rule, inflate=inflate,  # type: ignore[arg-type]
+                               rostopic=rostopic)
+        kalibr["axes"] = {"gyroscope": [c.name for c in done if c.group == "gyro" and c.model is not None],
+                          "accelerometer": [c.name for c in done if c.group == "accel" and c.model is not None]}
+        # Kalibr's values stand for all three axes: say when fewer went into them.
+        short = [f"{sensor} from {len(axes)} of 3 axes ({', '.join(axes)})"
+                 for sensor, axes in kalibr["axes"].items() if len(axes) < 3]
+        kalibr["axes_note"] = "; ".join(short)
+    elif model:
+        missing = [g for g, ms in (("gyroscope", gyro), ("accelerometer", accel)) if not ms]
+        kalibr_note = f"Kalibr needs both sensors; no {' and no '.join(missing)} model"
+    settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
+                list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
+                "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
+                "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
+                "workers": workers}
+    return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
+                       notes=tuple(notes), warnings=tuple(seen),
+                       seconds=time.perf_counter() - t0)
