@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 import refdata
-from sigmatau.stats import theo
+from sigmatau.stats import theo, theo_sums
 from sigmatau.stats.allan import oadev
 from sigmatau.datasets import nbs1000
 from sigmatau.errors import DataError, ParameterError, RangeWarning
@@ -128,7 +128,7 @@ def oracle_cases():
 
 def test_direct_sum_matches_oracle(oracle_cases):
     for kind, n, x, ms, ref in oracle_cases:
-        got = np.array([theo._theo1_sum_direct(x, int(m)) for m in ms])
+        got = np.array([theo_sums.theo1_sum_direct(x, int(m)) for m in ms])
         np.testing.assert_allclose(got, ref, rtol=1e-12, err_msg=f"{kind} N={n}")
 
 
@@ -139,7 +139,7 @@ def test_fast_sum_matches_oracle(oracle_cases):
     # Observed: ≤ 5e-13 (random-walk FM phase), ≤ 2e-14 otherwise.
     for kind, n, x, ms, ref in oracle_cases:
         for m, r in zip(ms, ref):
-            got, err = theo._theo1_sum_fast(x, int(m))
+            got, err = theo_sums.theo1_sum_fast(x, int(m))
             rel = abs(got - r) / r
             assert rel <= ORACLE_RTOL, f"{kind} N={n} m={m}: {rel:.2e}"
             assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
@@ -151,12 +151,12 @@ def test_fast_sum_in_small_pieces_matches_oracle(oracle_cases, monkeypatch, unca
     # read in chunks of 7 (odd, so chunks straddle every boundary), triangle blocks
     # and segments in groups of a few, and every transform through numpy.fft (the
     # path of long transforms, ≥ 2^18 points) or through scipy.fft.
-    monkeypatch.setattr(theo, "CHUNK", 7)
-    monkeypatch.setattr(theo, "_BATCH_ELEMENTS", 64)
-    monkeypatch.setattr(theo, "_UNCACHED_FFT", uncached_fft)
+    monkeypatch.setattr(theo_sums, "CHUNK", 7)
+    monkeypatch.setattr(theo_sums, "_BATCH_ELEMENTS", 64)
+    monkeypatch.setattr(theo_sums, "_UNCACHED_FFT", uncached_fft)
     for kind, n, x, ms, ref in oracle_cases:
         for m, r in zip(ms, ref):
-            got, err = theo._theo1_sum_fast(x, int(m))
+            got, err = theo_sums.theo1_sum_fast(x, int(m))
             rel = abs(got - r) / r
             assert rel <= ORACLE_RTOL, f"{kind} N={n} m={m}: {rel:.2e}"
             assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
@@ -167,20 +167,20 @@ def test_incremental_sums_match_oracle(oracle_cases):
     # on smooth phase at small m (up to 1e-7 here on random-walk FM); the error
     # estimate flags those factors and the dispatcher recomputes them.
     for kind, n, x, ms, ref in oracle_cases:
-        got, err = theo._theo1_sums_incremental(x, ms)
+        got, err = theo_sums.theo1_sums_incremental(x, ms)
         rel = np.abs(got - ref) / ref
         assert np.all(rel <= np.maximum(err, 1e-13)), f"{kind} N={n}"
-        assert np.all(rel[err <= theo._FAST_RTOL] <= ORACLE_RTOL)
+        assert np.all(rel[err <= theo_sums.FAST_RTOL] <= ORACLE_RTOL)
 
 
 def test_dispatched_sums_match_oracle(oracle_cases):
     # What theo1 uses: per factor (plain or lag sums), or one incremental pass, with
     # the plain sum wherever the fast forms could lose digits.
     for kind, n, x, ms, ref in oracle_cases:
-        np.testing.assert_allclose(theo._theo1_sums(x, ms), ref, rtol=ORACLE_RTOL, err_msg=f"{kind} N={n}")
+        np.testing.assert_allclose(theo_sums.theo1_sums(x, ms), ref, rtol=ORACLE_RTOL, err_msg=f"{kind} N={n}")
         every = np.arange(2, n, 2)  # many factors: the incremental pass
         ref_all = np.array([theo1_sum_plain(x, int(m)) for m in every[::7]])
-        np.testing.assert_allclose(theo._theo1_sums(x, every)[::7], ref_all, rtol=ORACLE_RTOL)
+        np.testing.assert_allclose(theo_sums.theo1_sums(x, every)[::7], ref_all, rtol=ORACLE_RTOL)
 
 
 def test_fast_paths_at_larger_n():
@@ -190,11 +190,11 @@ def test_fast_paths_at_larger_n():
         x = phase_series(kind, 4099, rng)
         x = x - np.linspace(x[0], x[-1], x.size)
         for m in (300, 1024, 2000, 4098):
-            got, err = theo._theo1_sum_fast(x, m)
-            assert err <= theo._FAST_RTOL
+            got, err = theo_sums.theo1_sum_fast(x, m)
+            assert err <= theo_sums.FAST_RTOL
             assert got == pytest.approx(theo1_sum_plain(x, m), rel=ORACLE_RTOL)
         ms = 12 + 4 * np.arange(4099 // 30 - 2)  # TheoBR's κ factors
-        got = theo._theo1_sums(x, ms)
+        got = theo_sums.theo1_sums(x, ms)
         for k in (0, 40, ms.size - 1):
             assert got[k] == pytest.approx(theo1_sum_plain(x, int(ms[k])), rel=ORACLE_RTOL)
 

@@ -25,6 +25,7 @@ import pytest
 
 import refdata
 import sigmatau.stats.total as total_mod
+import sigmatau.stats.total_sums as total_sums
 from refdata import (
     PINK_RATE,
     gps_phase,
@@ -412,7 +413,7 @@ def test_blocked_windows_equal_plain_definition(kind, block):
     """Blocks of one row, blocks that do not divide the count, several rows."""
     x = np.cumsum(_noise(kind, 97, np.random.default_rng(block)))
     for m in (1, 2, 5, 11):
-        got, windows = total_mod._tot_sums(x, m, block=block * (3 * m + 1))
+        got, windows = total_sums.tot_sums(x, m, block=block * (3 * m + 1))
         want, w_want = _tot_construction_plain(x, m)
         assert windows == w_want
         assert got / (6 * m * windows) == pytest.approx(want, rel=1e-10)
@@ -624,8 +625,8 @@ def test_memory_stays_blocked():
     u = np.random.default_rng(9).standard_normal(6000)
     tracemalloc.start()
     try:
-        total_mod._tot_sums(u, 1000)
+        total_sums.tot_sums(u, 1000)
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    assert peak < 5 * 8 * total_mod._BLOCK_ELEMENTS + 8 * u.size
+    assert peak < 5 * 8 * total_sums.BLOCK_ELEMENTS + 8 * u.size

@@ -23,6 +23,7 @@ import pytest
 from numpy.lib.stride_tricks import sliding_window_view
 
 import sigmatau.stats.total as total_mod
+import sigmatau.stats.total_sums as total_sums
 from _noise import NOISES
 from sigmatau.core.driver import prepare
 from sigmatau.errors import RangeWarning
@@ -62,7 +63,7 @@ def tot_plain(u, m):
 
 
 def fast_mean(u, m, **kw):
-    total, windows = total_mod._tot_sums_fast(np.asarray(u, dtype=float), m, **kw)
+    total, windows = total_sums.tot_sums_fast(np.asarray(u, dtype=float), m, **kw)
     return total / (6 * m * windows), windows
 
 
@@ -176,12 +177,12 @@ def test_public_functions_use_the_fast_path(name, monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RangeWarning)
         calls = []
-        fast = total_mod._tot_sums_fast
-        monkeypatch.setattr(total_mod, "_tot_sums_fast", lambda u, m: calls.append(m) or fast(u, m))
+        fast = total_sums.tot_sums_fast
+        monkeypatch.setattr(total_sums, "tot_sums_fast", lambda u, m: calls.append(m) or fast(u, m))
         mt = mtotdev(y, rate=rate, ci=None)
         tt = ttotdev(y, rate=rate, ci=None)
         ht = htotdev(y, rate=rate, ci=None)
-    assert set(calls) == {int(m) for m in mt.m if m >= total_mod._FAST_MIN_M}
+    assert set(calls) == {int(m) for m in mt.m if m >= total_sums.FAST_MIN_M}
     x, _, _ = prepare(total_mod.MTOT, y, rate, "freq")
     tau0 = 1.0 / rate
     for i, m in enumerate(mt.m):
@@ -208,7 +209,7 @@ def test_memory_is_linear_in_the_record():
     for m in (50, u.size // 6, u.size // 3):
         tracemalloc.start()
         try:
-            total_mod._tot_sums_fast(u, m)
+            total_sums.tot_sums_fast(u, m)
             _, peak = tracemalloc.get_traced_memory()
         finally:
             tracemalloc.stop()

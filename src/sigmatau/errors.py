@@ -7,12 +7,16 @@ argument are also :class:`ValueError` so that generic code keeps working.
 
 from __future__ import annotations
 
+import os
+import sys
+
 __all__ = [
     "SigmaTauError",
     "ParameterError",
     "DataError",
     "SigmaTauWarning",
     "RangeWarning",
+    "caller_stacklevel",
 ]
 
 
@@ -34,3 +38,22 @@ class SigmaTauWarning(UserWarning):
 
 class RangeWarning(SigmaTauWarning):
     """An averaging factor beyond the statistic's usable range was requested."""
+
+
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+
+
+def caller_stacklevel() -> int:
+    """The ``stacklevel`` of :func:`warnings.warn` that points at the first frame outside sigmatau.
+
+    Call it from the function that issues the warning: however many layers of
+    the package lie between the user's call and that function (a public
+    statistic, the engine, a streamed record, the driver), the warning names the
+    user's line, not the package's internals.
+    """
+    frame = sys._getframe(1)
+    level = 1
+    while frame is not None and frame.f_code.co_filename.startswith(_PACKAGE_DIR):
+        frame = frame.f_back
+        level += 1
+    return level

@@ -5,8 +5,9 @@
 
       import sigmatau.compat.allantools as allantools
 
-Nothing here is imported by ``import sigmatau``; the layers depend only on the
-public statistics and need none of the libraries they imitate.
+Nothing here is imported by ``import sigmatau``. Layer: beside
+:mod:`sigmatau.scale`; it may import the statistics (:mod:`sigmatau.stats`) and
+the layers below them, and needs none of the libraries it imitates.
 """
 
 from __future__ import annotations

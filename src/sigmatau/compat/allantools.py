@@ -70,7 +70,7 @@ Intentional differences from allantools
    conditioned (larger offsets or drifts, longer records), the larger the
    difference.
 6. **Cost.** Every statistic is O(N) per τ except mtotdev, ttotdev and
-   htotdev (whatever :mod:`sigmatau.total` costs) and theo1 (O(N log² m) per
+   htotdev (whatever :mod:`sigmatau.stats.total` costs) and theo1 (O(N log² m) per
    τ, or the plain O(N·m) sum where that is cheaper or needed for accuracy);
    allantools' theo1, mtotdev, ttotdev and htotdev loop in Python over O(N·m)
    terms per τ and its mtie reduces an O(N·m) window view. bench/ measures both.

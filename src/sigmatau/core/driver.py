@@ -131,7 +131,7 @@ def _validated(stat: Statistic, data: object, rate: object, data_type: object) -
     """Validated ``(samples, rate, data_type, n_points, k)``; N = number of phase points.
 
     The samples are scaled by the exact power of two 2**-k that brings their largest
-    magnitude into [0.5, 1) (:func:`~sigmatau._input.scale_to_unit`); integer data
+    magnitude into [0.5, 1) (:func:`~sigmatau.core.validate.scale_to_unit`); integer data
     beyond ±2**53 are first taken exactly relative to their first value when the
     statistic ignores that offset.
     """
@@ -196,7 +196,7 @@ class ScaledPhase:
         Kind of the user's data.
     exponent : int
         k: a variance computed from ``phase`` is the user's × 4**-k; undo it with
-        :func:`sigmatau._input.unscale_variance` ``(var, k, name)``.
+        :func:`sigmatau.core.validate.unscale_variance` ``(var, k, name)``.
     """
 
     phase: np.ndarray

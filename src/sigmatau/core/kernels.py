@@ -135,7 +135,7 @@ def block_sums_by_factor(y: np.ndarray, ms: np.ndarray):
 
 def window_sums_by_factor(y: np.ndarray, ms: np.ndarray, *, double: bool = False):
     """Yield ``(index, m, ws)`` over ``ms`` in increasing order, ``ws`` a
-    :class:`~sigmatau._numeric.WindowSums` advanced to m (its arrays are valid until the next step)."""
+    :class:`~sigmatau.core.numeric.WindowSums` advanced to m (its arrays are valid until the next step)."""
     ws = WindowSums(y, double=double)
     for i in np.argsort(ms, kind="stable"):
         m = int(ms[i])

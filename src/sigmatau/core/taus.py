@@ -27,7 +27,7 @@ from typing import Literal, Union
 
 import numpy as np
 
-from ..errors import ParameterError, RangeWarning
+from ..errors import ParameterError, RangeWarning, caller_stacklevel
 
 __all__ = ["TauGrid", "TAU_GRIDS", "STOP_RATIOS", "m_grid", "select_m", "long_factors_expected"]
 
@@ -171,7 +171,7 @@ def select_m(
                 f"{name}: {int(off.sum())} requested τ are not multiples of {step * tau_factor:g}·τ0;"
                 " they were rounded to the nearest usable averaging factor",
                 RangeWarning,
-                stacklevel=4,
+                stacklevel=caller_stacklevel(),
             )
         ms = np.unique(ms)
     if even and np.any(ms % 2):
@@ -187,7 +187,7 @@ def select_m(
             f"{name}: m > {default_max} (N/{stop_ratio:g}) has few degrees of freedom;"
             f" computed as requested for m={ms[ms > default_max].tolist()}",
             RangeWarning,
-            stacklevel=4,
+            stacklevel=caller_stacklevel(),
         )
     return ms
 

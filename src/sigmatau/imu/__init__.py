@@ -1,9 +1,14 @@
 """The IEEE 952 / IEEE 1293 noise model of gyroscopes and accelerometers.
 
-What it holds: the model and its terms (``model``), units and conversions
-(``units``), data checks (``checks``). What it may import: the statistics,
-uncertainty, noise and core layers; never I/O, reports, the scale-out layer or
-the CLI. The public API is re-exported here (``sigmatau.imu.*``).
+What it holds: the public face of the model (``model``, re-exported here as
+``sigmatau.imu.*``) and its parts — the terms and their constants (``terms``),
+the result types (``results``, ``noisemodel``), part presets (``presets``),
+simulation (``simulation``), read-offs (``readoffs``), the weighted fit and its
+intervals (``fitting``), ``analyze`` itself (``extraction``), the design tip's
+answers (``answers``), Kalibr values (``kalibr``); units and conversions
+(``units``); data checks of samples (``checks``) and timestamps
+(``timestamps``). What it may import: the statistics, uncertainty, noise and
+core layers; never I/O, reports, the scale-out layer or the CLI.
 """
 
 from .model import *  # noqa: F401,F403

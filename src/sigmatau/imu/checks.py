@@ -19,15 +19,15 @@
   allows, and logs that repeat (hold) samples because they are recorded faster
   than the sensor updates (:class:`StuckValueWarning`).
 
-:func:`check_timestamps` reports out-of-order, duplicated and missing time
-stamps and the sample rate they imply, without rejecting anything.
+:func:`~sigmatau.imu.timestamps.check_timestamps` (in ``timestamps``) reports
+out-of-order, duplicated and missing time stamps and the sample rate they imply.
 """
 
 from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any, Optional
 
 import numpy as np
@@ -41,12 +41,9 @@ __all__ = [
     "AliasingWarning",
     "SaturationWarning",
     "StuckValueWarning",
-    "TimestampWarning",
     "DataChecks",
-    "TimestampChecks",
     "estimate_lsb",
     "check_samples",
-    "check_timestamps",
     "FEW_LSB",
 ]
 
@@ -81,10 +78,6 @@ class SaturationWarning(DataCheckWarning):
 
 class StuckValueWarning(DataCheckWarning):
     """Runs of repeated values longer than chance allows."""
-
-
-class TimestampWarning(DataCheckWarning):
-    """Time stamps out of order, duplicated or missing."""
 
 
 @dataclass(frozen=True)
@@ -342,12 +335,60 @@ def check_samples(
     x = as_series(samples, "samples")
     rate_f = check_rate(rate)
     u = f" {unit}" if unit else ""
-    findings: list[str] = []
-    issued: list[tuple[type, str]] = []
+    found = _Findings()
     n = x.size
     std = float(x.std(ddof=1)) if n > 1 else 0.0
+    q = _check_quantisation(x, rate_f, lsb, std, u, found)
+    ratio, rolloff = _check_spectrum(x, rate_f, q.n_levels, found)
+    dec = _check_decimation(odr, rate_f, rolloff, found)
+    saturated = _check_saturation(x, q, full_scale, u, found)
+    runs = _check_runs(x, q, rate_f, found)
+    if warn:
+        for cls, msg in found.issued:
+            warnings.warn(msg, cls, stacklevel=2)
+    return DataChecks(
+        n_samples=int(n), std=std, levels=q.n_levels, lsb=q.step, std_lsb=q.std_lsb,
+        quantization_density=q.qdens, spectrum_ratio=ratio, rolloff=rolloff, decimation_factor=dec,
+        saturated=int(saturated), stuck_runs=runs.stuck_runs, stuck_samples=runs.stuck_samples,
+        longest_run=runs.longest, run_threshold=int(runs.threshold),
+        repeated_fraction=runs.repeated, findings=tuple(found.findings),
+        warned=tuple((cls.__name__, msg) for cls, msg in found.issued),
+    )
 
-    # --- quantisation
+
+class _Findings:
+    """What the checks found: every finding as text, and those that warrant a warning."""
+
+    def __init__(self) -> None:
+        self.findings: list[str] = []
+        self.issued: list[tuple[type, str]] = []
+
+    def note(self, msg: str) -> None:
+        self.findings.append(msg)
+
+    def warn(self, cls: type, msg: str) -> None:
+        self.findings.append(msg)
+        self.issued.append((cls, msg))
+
+
+@dataclass(frozen=True)
+class _Levels:
+    """The quantisation of a channel: its step and, for a quantised one, its distinct values."""
+
+    step: Optional[float]
+    values: Optional[np.ndarray]
+    counts: Optional[np.ndarray]
+    std_lsb: Optional[float]
+    qdens: Optional[float]
+
+    @property
+    def n_levels(self) -> Optional[int]:
+        return None if self.values is None else int(self.values.size)
+
+
+def _check_quantisation(x: np.ndarray, rate_f: float, lsb: Optional[float], std: float, u: str,
+                        found: _Findings) -> _Levels:
+    """The LSB (given or estimated from the levels), its white-noise floor, and a warning below FEW_LSB."""
     if lsb is not None:
         if isinstance(lsb, bool) or not (isinstance(lsb, (int, float, np.floating, np.integer)) and lsb > 0
                                          and math.isfinite(lsb)):
@@ -364,60 +405,68 @@ def check_samples(
     qdens = step / math.sqrt(12.0 * rate_f) if step else None
     if step is not None:
         levels_text = f", {values.size} levels" if values is not None else ""
-        findings.append(
+        found.note(
             f"quantised: LSB {step:.6g}{u}{levels_text}, std {std_lsb:.3g} LSB;"
             f" the quantiser adds a white-noise density of about {qdens:.3g}{u}/√Hz to N"
         )
         if std_lsb is not None and std_lsb < FEW_LSB:
-            msg = (f"std is only {std_lsb:.2g} LSB (LSB {step:.6g}{u}): quantisation dominates the short-τ"
-                   f" noise and the white-noise figure (N) is unreliable; its quantisation floor is"
-                   f" {qdens:.3g}{u}/√Hz")
-            findings.append(msg)
-            issued.append((QuantizationWarning, msg))
-    n_levels = None if values is None else int(values.size)
-    if n_levels == 1:
-        msg = "all samples are equal: nothing to analyse"
-        findings.append(msg)
-        issued.append((StuckValueWarning, msg))
+            found.warn(QuantizationWarning,
+                       f"std is only {std_lsb:.2g} LSB (LSB {step:.6g}{u}): quantisation dominates the short-τ"
+                       f" noise and the white-noise figure (N) is unreliable; its quantisation floor is"
+                       f" {qdens:.3g}{u}/√Hz")
+    levels = _Levels(step, values, counts, std_lsb, qdens)
+    if levels.n_levels == 1:
+        found.warn(StuckValueWarning, "all samples are equal: nothing to analyse")
+    return levels
 
-    # --- spectrum roll-off and decimation
+
+def _check_spectrum(x: np.ndarray, rate_f: float, n_levels: Optional[int],
+                    found: _Findings) -> tuple[Optional[float], str]:
+    """The PSD ratio near Nyquist and what it says: ``rolls off``, ``flat``, ``rises`` or ``unknown``."""
     ratio = _spectrum_ratio(x, rate_f) if n_levels != 1 else None
     if ratio is None:
-        rolloff = "unknown"
-    elif ratio < _ROLLS_OFF_BELOW:
+        return None, "unknown"
+    if ratio < _ROLLS_OFF_BELOW:
         rolloff = "rolls off"
     elif ratio > _RISES_ABOVE:
         rolloff = "rises"
     else:
         rolloff = "flat"
-    if ratio is not None:
-        text = {
-            "rolls off": "the spectrum rolls off below f/2 (the samples are averaged or low-passed)",
-            "flat": "the spectrum is flat up to f/2 (sensor bandwidth ≥ f/2, or decimation without averaging)",
-            "rises": "the spectrum rises towards f/2 (angle/velocity quantisation, or a folded filter skirt)",
-        }[rolloff]
-        findings.append(f"{text}: PSD(0.40–0.48 f)/PSD(0.10–0.25 f) = {ratio:.2f}")
-    dec = None
-    if odr is not None:
-        odr_f = check_rate(odr)
-        dec = odr_f / rate_f
-        if dec > 1.01:
-            if rolloff in ("flat", "rises"):
-                msg = (f"the sensor runs at {odr_f:g} Hz and the log at {rate_f:g} Hz with no anti-alias roll-off:"
+    text = {
+        "rolls off": "the spectrum rolls off below f/2 (the samples are averaged or low-passed)",
+        "flat": "the spectrum is flat up to f/2 (sensor bandwidth ≥ f/2, or decimation without averaging)",
+        "rises": "the spectrum rises towards f/2 (angle/velocity quantisation, or a folded filter skirt)",
+    }[rolloff]
+    found.note(f"{text}: PSD(0.40–0.48 f)/PSD(0.10–0.25 f) = {ratio:.2f}")
+    return ratio, rolloff
+
+
+def _check_decimation(odr: Optional[float], rate_f: float, rolloff: str, found: _Findings) -> Optional[float]:
+    """The decimation factor from the sensor's own rate, and a warning when it aliased white noise."""
+    if odr is None:
+        return None
+    odr_f = check_rate(odr)
+    dec = odr_f / rate_f
+    if dec > 1.01:
+        if rolloff in ("flat", "rises"):
+            found.warn(AliasingWarning,
+                       f"the sensor runs at {odr_f:g} Hz and the log at {rate_f:g} Hz with no anti-alias roll-off:"
                        f" if every {dec:.3g}th sample was kept (decimation without averaging) the white-noise"
                        f" density N appears √{dec:.3g} = {math.sqrt(dec):.3g} times too large (the per-sample σ is"
                        " right); block averages would keep N. Compare N with the datasheet density to tell")
-                findings.append(msg)
-                issued.append((AliasingWarning, msg))
-            elif rolloff == "rolls off":
-                findings.append(f"decimated by {dec:.3g} from {odr_f:g} Hz through an anti-alias filter"
-                                " (roll-off present)")
-        elif dec < 0.99:
-            findings.append(f"the log rate {rate_f:g} Hz exceeds the sensor's output rate {odr_f:g} Hz:"
-                            " samples are repeated")
+        elif rolloff == "rolls off":
+            found.note(f"decimated by {dec:.3g} from {odr_f:g} Hz through an anti-alias filter"
+                       " (roll-off present)")
+    elif dec < 0.99:
+        found.note(f"the log rate {rate_f:g} Hz exceeds the sensor's output rate {odr_f:g} Hz:"
+                   " samples are repeated")
+    return dec
 
-    # --- saturation
-    quantized = step is not None
+
+def _check_saturation(x: np.ndarray, q: _Levels, full_scale: Optional[float], u: str, found: _Findings) -> int:
+    """Samples piled up at the extremes (or at ±full_scale): the number that look saturated."""
+    quantized = q.step is not None
+    values, counts = q.values, q.counts
     saturated = 0
     where: list[str] = []
     if values is None:
@@ -425,8 +474,8 @@ def check_samples(
         hi, lo = _pile_up(x, top, 0, False), _pile_up(x, bottom, 0, False)
     elif values.size > 2:
         top, bottom = float(values[-1]), float(values[0])
-        hi = _pile_up(x, top, int(counts[-2]), quantized)
-        lo = _pile_up(x, bottom, int(counts[1]), quantized)
+        hi = _pile_up(x, top, int(counts[-2]), quantized)  # type: ignore[index]
+        lo = _pile_up(x, bottom, int(counts[1]), quantized)  # type: ignore[index]
     else:
         hi = lo = 0
     if hi or lo:
@@ -441,12 +490,26 @@ def check_samples(
             saturated = beyond
             where = [f"{beyond} at or beyond ±{fs:g}{u}"]
     if saturated:
-        msg = (f"{saturated} samples ({100.0 * saturated / n:.3g} %) look saturated ({', '.join(where)}):"
-               " clipped segments bias every deviation; cut them out")
-        findings.append(msg)
-        issued.append((SaturationWarning, msg))
+        found.warn(SaturationWarning,
+                   f"{saturated} samples ({100.0 * saturated / x.size:.3g} %) look saturated ({', '.join(where)}):"
+                   " clipped segments bias every deviation; cut them out")
+    return saturated
 
-    # --- stuck and held values
+
+@dataclass(frozen=True)
+class _Runs:
+    """Runs of identical samples: those long enough to be stuck, and the fraction of repeats."""
+
+    stuck_runs: int
+    stuck_samples: int
+    longest: int
+    threshold: int
+    repeated: float
+
+
+def _check_runs(x: np.ndarray, q: _Levels, rate_f: float, found: _Findings) -> _Runs:
+    """Stuck output (runs too long for chance) and held samples (too many equal neighbours)."""
+    n, n_levels, counts = x.size, q.n_levels, q.counts
     starts, lengths = _runs(x)
     p_same = float(np.sum((counts / n) ** 2)) if counts is not None else 0.0
     repeated = float(np.mean(np.diff(x) == 0)) if n > 1 else 0.0
@@ -466,130 +529,11 @@ def check_samples(
                f" {int(lengths.max())} = {longest_s:.3g} s, first at index {int(starts[first])}):"
                " stuck output or dropped updates")
         if stuck_samples >= 1e-3 * n or longest_s >= 1.0:
-            findings.append(msg)
-            issued.append((StuckValueWarning, msg))
+            found.warn(StuckValueWarning, msg)
         else:
-            findings.append(msg + f"; too short to change the figures ({100 * stuck_samples / n:.2g} % of the record)")
+            found.note(msg + f"; too short to change the figures ({100 * stuck_samples / n:.2g} % of the record)")
     if n > 1 and n_levels != 1 and repeated > 3.0 * p_same + 0.05:
-        msg = (f"{100 * repeated:.3g} % of consecutive samples are equal (chance: {100 * p_same:.2g} %):"
-               " the log is recorded faster than the sensor updates (held samples); use the sensor's rate")
-        findings.append(msg)
-        issued.append((StuckValueWarning, msg))
-
-    if warn:
-        for cls, msg in issued:
-            warnings.warn(msg, cls, stacklevel=2)
-    return DataChecks(
-        n_samples=int(n), std=std, levels=n_levels, lsb=step, std_lsb=std_lsb,
-        quantization_density=qdens, spectrum_ratio=ratio, rolloff=rolloff, decimation_factor=dec,
-        saturated=int(saturated), stuck_runs=stuck_runs, stuck_samples=stuck_samples,
-        longest_run=int(lengths.max()) if n else 0, run_threshold=int(threshold),
-        repeated_fraction=repeated, findings=tuple(findings),
-        warned=tuple((cls.__name__, msg) for cls, msg in issued),
-    )
-
-
-@dataclass(frozen=True)
-class TimestampChecks:
-    """Findings of :func:`check_timestamps`.
-
-    Attributes
-    ----------
-    n_samples : int
-    rate : float
-        Sample rate from the median interval (robust to gaps).
-    mean_rate : float
-        ``(n − 1)/(t_last − t_first)`` as some tools compute it; lower than
-        ``rate`` when samples are missing.
-    backwards : int
-        Intervals that go back in time.
-    duplicates : int
-        Intervals of zero length.
-    gaps : int
-        Intervals longer than 1.5 median intervals.
-    missing : int
-        Samples missing in those gaps (estimate).
-    jitter : float
-        Standard deviation of the intervals over their median (forward ones).
-    order : numpy.ndarray
-        Indices that sort the time stamps (stable), to reorder rather than drop.
-    findings : tuple of str
-    """
-
-    n_samples: int
-    rate: float
-    mean_rate: float
-    backwards: int
-    duplicates: int
-    gaps: int
-    missing: int
-    jitter: float
-    order: np.ndarray = field(repr=False)
-    findings: tuple[str, ...] = ()
-
-    def to_dict(self) -> dict[str, Any]:
-        """Plain dictionary without ``order`` (JSON-ready)."""
-        out = asdict(self)
-        out.pop("order")
-        out["findings"] = list(self.findings)
-        return out
-
-
-def check_timestamps(t: object, *, scale: float = 1.0, warn: bool = True) -> TimestampChecks:
-    """Out-of-order, duplicated and missing time stamps, and the rate they imply.
-
-    Parameters
-    ----------
-    t : array_like
-        Time stamps, in seconds times ``scale`` (``scale=1e-9`` for the
-        nanoseconds of a EuRoC ``data.csv``).
-    scale : float
-        Factor from the stamps' unit to seconds.
-    warn : bool
-        Issue a :class:`TimestampWarning` when anything is found.
-
-    Returns
-    -------
-    TimestampChecks
-        Nothing is dropped: ``order`` sorts the samples, and the caller decides
-        what to do with duplicates and gaps.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sigmatau.checks import check_timestamps
-    >>> t = np.arange(1000) * 0.005
-    >>> t = np.delete(t, range(100, 120))          # 20 dropped samples
-    >>> c = check_timestamps(t, warn=False)
-    >>> round(c.rate, 6), c.gaps, c.missing
-    (200.0, 1, 20)
-    """
-    ts = as_series(t, "t") * float(scale)
-    if ts.size < 3:
-        raise ParameterError(f"check_timestamps needs at least 3 time stamps, got {ts.size}")
-    dt = np.diff(ts)
-    forward = dt[dt > 0]
-    if forward.size == 0:
-        raise ParameterError("the time stamps never increase")
-    med = float(np.median(forward))
-    backwards = int(np.count_nonzero(dt < 0))
-    duplicates = int(np.count_nonzero(dt == 0))
-    long = forward > 1.5 * med
-    gaps = int(long.sum())
-    missing = int(np.sum(np.round(forward[long] / med) - 1))
-    span = float(ts.max() - ts.min())
-    mean_rate = (ts.size - 1) / span if span > 0 else float("nan")
-    jitter = float(np.std(forward[~long]) / med) if (~long).any() else 0.0
-    findings = []
-    if backwards:
-        findings.append(f"{backwards} time stamp(s) go backwards: sort the samples (order) instead of dropping them")
-    if duplicates:
-        findings.append(f"{duplicates} duplicated time stamp(s)")
-    if gaps:
-        findings.append(f"{gaps} gap(s) with about {missing} missing samples; the rate from the mean interval"
-                        f" ({mean_rate:.6g} Hz) is lower than from the median ({1.0 / med:.6g} Hz)")
-    if warn and findings:
-        warnings.warn("; ".join(findings), TimestampWarning, stacklevel=2)
-    return TimestampChecks(n_samples=int(ts.size), rate=1.0 / med, mean_rate=mean_rate, backwards=backwards,
-                           duplicates=duplicates, gaps=gaps, missing=missing, jitter=jitter,
-                           order=np.argsort(ts, kind="stable"), findings=tuple(findings))
+        found.warn(StuckValueWarning,
+                   f"{100 * repeated:.3g} % of consecutive samples are equal (chance: {100 * p_same:.2g} %):"
+                   " the log is recorded faster than the sensor updates (held samples); use the sensor's rate")
+    return _Runs(stuck_runs, stuck_samples, int(lengths.max()) if n else 0, int(threshold), repeated)

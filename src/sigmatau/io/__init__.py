@@ -11,6 +11,10 @@ NumPy only; ``rosbag1`` and ``rosbag2`` (sqlite3 and MCAP) need the extra
 ``parquet`` the extra ``parquet`` (``pyarrow``); each is imported only when
 such a file is read.
 
+Layer: beside :mod:`sigmatau.imu`, above the statistics. It may import
+:mod:`sigmatau.core` and :mod:`sigmatau.errors` only (it has its own unit
+tables), never the statistics, reports, the scale-out layer or the CLI.
+
 Errors are one line naming the file and the problem, from sigmatau's hierarchy:
 :class:`InputNotFoundError` (also a FileNotFoundError), :class:`FormatError`
 and the other :class:`~sigmatau.errors.DataError` cases, a

@@ -7,7 +7,7 @@ import inspect
 import os
 import warnings as _warnings
 from pathlib import Path
-from typing import Literal, Mapping, Sequence, Union
+from typing import Any, Literal, Mapping, Sequence, Union
 
 import numpy as np
 
@@ -375,100 +375,15 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
         raise DataError(f"{display}: no numeric data")
     names, groups_of = _names_groups(table)
     if not opts.allow_nan:
-        for orig, v in data.items():
-            bad = ~np.isfinite(v)
-            if bad.any():
-                i = int(np.flatnonzero(bad)[0])
-                called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
-                raise DataError(
-                    f"{display}: column {called} holds {int(bad.sum())} NaN/inf value(s) (first at sample {i});"
-                    " remove them from the file (in Python, allow_nan=True keeps them)"
-                )
+        _refuse_non_finite(data, names, display)
     channels = {names[o]: v for o, v in data.items()}
-    group_members: dict[str, list[str]] = {}
-    for o in data:
-        group_members.setdefault(groups_of[o], []).append(names[o])
-    order = ["gyro", "accel", "temperature", "phase", "freq"]
-    groups = {g: tuple(group_members[g]) for g in sorted(group_members, key=lambda g: (
-        order.index(g) if g in order else len(order), g))}
-
-    units: dict[str, str] = {}
-    origin: dict[str, str] = {}
-    for o in data:
-        if o in table.units and table.units[o]:
-            units[names[o]] = _file_unit(table.units[o], groups_of[o])
-            origin[names[o]] = table.unit_origin
-    if opts.units:
-        by_original = {o: names[o] for o in data}
-        for key, text in opts.units.items():
-            if key in groups:
-                targets = [(n, key) for n in groups[key]]
-            elif key in channels:
-                targets = [(key, next(g for o, g in groups_of.items() if names[o] == key))]
-            elif key in by_original:
-                targets = [(by_original[key], groups_of[key])]
-            else:
-                raise ParameterError(
-                    f"units key {key!r} is neither a group ({', '.join(groups)}) nor a channel"
-                    f" ({', '.join(channels)}) of {display}"
-                )
-            for name, group in targets:
-                unit = declared_unit(group, text, key=key)
-                if name in units and units[name] != unit and origin.get(name) in ("file", "format"):
-                    messages.append((
-                        f"{display}: channel {name!r} is in {_printable(units[name])} according to the"
-                        f" {origin[name]};"
-                        f" using the declared {unit}", InputWarning))
-                units[name] = unit
-                origin[name] = "declared"
-    _check_units(units, origin, groups, {names[o]: o for o in data}, display)
-    for group, unit in DEFAULT_UNITS.items():
-        for name in groups.get(group, ()):
-            if name not in units:
-                units[name] = unit
-                origin[name] = "default"
-    for name in channels:
-        units.setdefault(name, "")
-        origin.setdefault(name, "")
-
-    warn_texts: list[str] = list(table.warnings)
-    rate = opts.rate if opts.rate is not None else table.rate
-    rate_source = "given" if opts.rate is not None else "file"
-    timestamps = None
-    time_origin = None
-    if table.time is not None:
-        assert table.time_name is not None
-        check_times(table.time, name=table.time_name, path=display)
-        if opts.time_unit is not None:
-            unit, reason = opts.time_unit, "given"
-        elif table.time_unit is not None:
-            unit, reason = table.time_unit, table.time_unit_reason or "stated by the format"
-        else:
-            unit, reason = infer_time_unit(table.time, name=table.time_name, stated=None, path=display)
-        timing_messages: list[str] = []
-        timestamps, channels, report, time_origin = process(
-            table.time, channels, unit=unit, unit_reason=reason, time_name=table.time_name,
-            rate=rate, rate_source=rate_source, rows=table.rows, path=display, gaps=opts.gaps,
-            gap_threshold=opts.gap_threshold, unsorted=opts.unsorted, duplicates=opts.duplicates,
-            warnings=timing_messages,
-        )
-        messages.extend((m, TimingWarning) for m in timing_messages)
-    else:
-        if opts.time_unit is not None:
-            raise ParameterError(f"{display}: time_unit={opts.time_unit!r} (--time-unit) given but the file has"
-                                 " no time column")
-        if rate is None:
-            raise ParameterError(
-                f"{display}: no time column and no rate; give the rate in Hz with"
-                f" {option_hint('--rate HZ', 'rate=')} or the time column with"
-                f" {option_hint('--time-column NAME', 'time_column=')}"
-                f" (columns: {list_names(list(table.columns))})"
-            )
-        report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
-                         gaps=opts.gaps, gap_threshold=opts.gap_threshold)
+    groups = _grouped(data, names, groups_of)
+    units, origin = _channel_units(table, opts, display, names, groups_of, groups, channels, messages)
+    channels, timestamps, report, time_origin = _timing(table, opts, display, channels, messages)
     n = report.samples
     if n < MIN_SAMPLES:
         raise DataError(f"{display}: only {n} sample(s); at least {MIN_SAMPLES} are needed")
+    warn_texts: list[str] = list(table.warnings)
     if table.unused:
         warn_texts.append(unused_message(display, table.unused))
     messages.extend((m, InputWarning) for m in warn_texts)
@@ -490,6 +405,121 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
         original_names={names[o]: o for o in data},
         time_origin=time_origin,
     )
+
+
+def _refuse_non_finite(data: dict[str, np.ndarray], names: dict[str, str], display: str) -> None:
+    """One line naming the first column with NaN or inf, and where (unless allow_nan)."""
+    for orig, v in data.items():
+        bad = ~np.isfinite(v)
+        if bad.any():
+            i = int(np.flatnonzero(bad)[0])
+            called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
+            raise DataError(
+                f"{display}: column {called} holds {int(bad.sum())} NaN/inf value(s) (first at sample {i});"
+                " remove them from the file (in Python, allow_nan=True keeps them)"
+            )
+
+
+def _grouped(data: dict[str, np.ndarray], names: dict[str, str],
+             groups_of: dict[str, str]) -> dict[str, tuple[str, ...]]:
+    """Channel names by group, gyro and accel first."""
+    group_members: dict[str, list[str]] = {}
+    for o in data:
+        group_members.setdefault(groups_of[o], []).append(names[o])
+    order = ["gyro", "accel", "temperature", "phase", "freq"]
+    return {g: tuple(group_members[g]) for g in sorted(group_members, key=lambda g: (
+        order.index(g) if g in order else len(order), g))}
+
+
+def _channel_units(table: Table, opts: Options, display: str, names: dict[str, str], groups_of: dict[str, str],
+                   groups: dict[str, tuple[str, ...]], channels: dict[str, np.ndarray],
+                   messages: list[tuple[str, type[Warning]]]) -> tuple[dict[str, str], dict[str, str]]:
+    """Each channel's unit and where it came from: the file, then ``units=``, then the group default."""
+    data = table.data
+    units: dict[str, str] = {}
+    origin: dict[str, str] = {}
+    for o in data:
+        if o in table.units and table.units[o]:
+            units[names[o]] = _file_unit(table.units[o], groups_of[o])
+            origin[names[o]] = table.unit_origin
+    if opts.units:
+        _declared_units(opts.units, display, names, groups_of, groups, channels, units, origin, messages)
+    _check_units(units, origin, groups, {names[o]: o for o in data}, display)
+    for group, unit in DEFAULT_UNITS.items():
+        for name in groups.get(group, ()):
+            if name not in units:
+                units[name] = unit
+                origin[name] = "default"
+    for name in channels:
+        units.setdefault(name, "")
+        origin.setdefault(name, "")
+    return units, origin
+
+
+def _declared_units(declared: Mapping[str, str], display: str, names: dict[str, str], groups_of: dict[str, str],
+                    groups: dict[str, tuple[str, ...]], channels: dict[str, np.ndarray], units: dict[str, str],
+                    origin: dict[str, str], messages: list[tuple[str, type[Warning]]]) -> None:
+    """``units=`` applied by group, channel or original column name (a warning where the file said otherwise)."""
+    by_original = {o: names[o] for o in names}
+    for key, text in declared.items():
+        if key in groups:
+            targets = [(n, key) for n in groups[key]]
+        elif key in channels:
+            targets = [(key, next(g for o, g in groups_of.items() if names[o] == key))]
+        elif key in by_original:
+            targets = [(by_original[key], groups_of[key])]
+        else:
+            raise ParameterError(
+                f"units key {key!r} is neither a group ({', '.join(groups)}) nor a channel"
+                f" ({', '.join(channels)}) of {display}"
+            )
+        for name, group in targets:
+            unit = declared_unit(group, text, key=key)
+            if name in units and units[name] != unit and origin.get(name) in ("file", "format"):
+                messages.append((
+                    f"{display}: channel {name!r} is in {_printable(units[name])} according to the"
+                    f" {origin[name]};"
+                    f" using the declared {unit}", InputWarning))
+            units[name] = unit
+            origin[name] = "declared"
+
+
+def _timing(table: Table, opts: Options, display: str, channels: dict[str, np.ndarray],
+            messages: list[tuple[str, type[Warning]]]) -> tuple[dict[str, np.ndarray], Any, Any, Any]:
+    """Channels, timestamps, timing report and time origin: from the time column, or the rate alone."""
+    rate = opts.rate if opts.rate is not None else table.rate
+    rate_source = "given" if opts.rate is not None else "file"
+    if table.time is None:
+        if opts.time_unit is not None:
+            raise ParameterError(f"{display}: time_unit={opts.time_unit!r} (--time-unit) given but the file has"
+                                 " no time column")
+        if rate is None:
+            raise ParameterError(
+                f"{display}: no time column and no rate; give the rate in Hz with"
+                f" {option_hint('--rate HZ', 'rate=')} or the time column with"
+                f" {option_hint('--time-column NAME', 'time_column=')}"
+                f" (columns: {list_names(list(table.columns))})"
+            )
+        report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
+                         gaps=opts.gaps, gap_threshold=opts.gap_threshold)
+        return channels, None, report, None
+    assert table.time_name is not None
+    check_times(table.time, name=table.time_name, path=display)
+    if opts.time_unit is not None:
+        unit, reason = opts.time_unit, "given"
+    elif table.time_unit is not None:
+        unit, reason = table.time_unit, table.time_unit_reason or "stated by the format"
+    else:
+        unit, reason = infer_time_unit(table.time, name=table.time_name, stated=None, path=display)
+    timing_messages: list[str] = []
+    timestamps, channels, report, time_origin = process(
+        table.time, channels, unit=unit, unit_reason=reason, time_name=table.time_name,
+        rate=rate, rate_source=rate_source, rows=table.rows, path=display, gaps=opts.gaps,
+        gap_threshold=opts.gap_threshold, unsorted=opts.unsorted, duplicates=opts.duplicates,
+        warnings=timing_messages,
+    )
+    messages.extend((m, TimingWarning) for m in timing_messages)
+    return channels, timestamps, report, time_origin
 
 
 def list_topics(path: PathLike) -> list[TopicInfo]:

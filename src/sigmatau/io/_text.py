@@ -19,8 +19,6 @@ columns as float64 plus one chunk of text.
 from __future__ import annotations
 
 import bz2
-import csv
-import functools
 import gzip
 import hashlib
 import io
@@ -29,30 +27,26 @@ import lzma
 import re
 import warnings
 import zlib
-from collections import Counter
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterator
+from typing import Iterator, Sequence
 
 import numpy as np
 
 from ..errors import DataError, ParameterError
 from ._columns import recognise, select, strip_name, time_name
 from ._errors import FormatError, option_hint, repr_kw
-from ._limits import MAX_LINE_CHARS, check_allocation
+from ._limits import check_allocation
 from ._progress import Progress
 from ._registry import Options, Table, register
 from ._units import canonical_unit, time_unit_name
+from ._sniff import (
+    _DELIMITER_NAMES, _DELIMITERS, _COMMENTS, _INT, _Sniff, _check_lengths, _is_num, _lines, _read_head, _shown, _split, _strip_comment,
+)
 
 __all__ = ["read_csv", "read_stable32"]
 
-_COMMENTS = ("#", "%", "//")
-_DELIMITERS: tuple[str | None, ...] = ("\t", ",", ";", "|", None)
-_DELIMITER_NAMES = {"\t": "tab", ",": "comma", ";": "semicolon", "|": "pipe", None: "whitespace"}
-_SNIFF_ROWS = 200
-_SNIFF_MAX_LINES = 20_000
 CHUNK_ROWS = 1 << 16
-_INT = re.compile(r"^[+-]?\d+$")
-_DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+(?:[eE][+-]?\d+)?$")
 _MJD = (15_000.0, 100_000.0)  # 1900 … 2132
 _DATA_TYPE_HINT = option_hint("--data-type phase|freq", "data_type='phase' or 'freq'")
 
@@ -101,224 +95,6 @@ def _open(path: Path, stream: io.RawIOBase | None = None
         stream, kind = buffered, ""
     text = io.TextIOWrapper(stream, encoding="utf-8-sig", errors="replace", newline=None)
     return hashing, text, kind, buffered
-
-
-def _strip_comment(line: str) -> str:
-    cut = len(line)
-    for c in _COMMENTS:
-        k = line.find(c)
-        if k != -1:
-            cut = min(cut, k)
-    return line[:cut]
-
-
-def _split(line: str, delimiter: str | None) -> list[str]:
-    if delimiter is None:
-        return line.split()
-    if not line:
-        return []
-    if '"' not in line:  # what the csv module would return, without its 131,072-character field limit
-        return [f.strip() for f in line.split(delimiter)]
-    try:
-        fields = next(csv.reader([line], delimiter=delimiter, quotechar='"', skipinitialspace=True), [])
-    except csv.Error:  # a quoted field over the csv module's limit: not a number nor a name anyway
-        return [f.strip().strip('"') for f in line.split(delimiter)]
-    return [f.strip() for f in fields]
-
-
-def _shown(value: str) -> str:
-    """A field for a one-line message: quoted, at most 40 characters of it."""
-    if not value:
-        return "an empty field"
-    return repr(value) if len(value) <= 40 else repr(value[:40]) + f"… ({len(value):,} characters)"
-
-
-def _lines(text: io.TextIOWrapper) -> Iterator[str]:
-    """Lines of at most MAX_LINE_CHARS characters: a longer line arrives cut and is refused
-    by :func:`_check_lengths` instead of being held whole in memory."""
-    return iter(functools.partial(text.readline, MAX_LINE_CHARS), "")
-
-
-def _check_lengths(lines: list[str], first: int, display: str) -> None:
-    if lines and max(map(len, lines)) >= MAX_LINE_CHARS:
-        k = next(i for i, s in enumerate(lines) if len(s) >= MAX_LINE_CHARS)
-        raise DataError(
-            f"{display}: line {first + k} is longer than {MAX_LINE_CHARS:,} characters; not a table of numbers"
-        )
-
-
-def _is_num(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return "_" not in s
-
-
-def _tail(split: list[list[str]]) -> tuple[list[list[str]], int, bool]:
-    """The last lines (at most 20, at most half), their usual field count, and whether 80 % have it."""
-    tail = split[-min(20, (len(split) + 1) // 2):]
-    counts = Counter(len(f) for f in tail)
-    c, hits = max(counts.items(), key=lambda kv: (kv[1], kv[0]))
-    return tail, c, hits >= 0.8 * len(tail)
-
-
-def _single_name(line: str) -> bool:
-    """Whether a line can name a lone column: one word, or a channel or time name with a unit."""
-    text = line.strip().strip('"')
-    return len(text.split()) == 1 or recognise(text).group is not None or time_name(text) is not None
-
-
-def _is_units_line(fields: list[str]) -> bool:
-    """Whether a line under the header gives units: no numbers, every field a known unit or
-    bracketed, at least one known or all bracketed (unknown ones are then refused by name,
-    not skipped as a preamble line and replaced by a default unit)."""
-    present = [x for x in fields if x]
-    if not present or any(_is_num(x) for x in present):
-        return False
-    known = [bool(canonical_unit(x.strip("[]()")) or time_unit_name(x.strip("[]()"))) for x in present]
-    bracketed = [x[:1] in "[(" and x[-1:] in "])" for x in present]
-    short = all(len(x) <= 24 and len(x.split()) <= 3 for x in present)
-    return short and (all(known) or all(bracketed) or (any(known) and all(k or len(x.split()) == 1
-                                                                          for k, x in zip(known, present))))
-
-
-def _mostly_numeric(values: list[str]) -> bool:
-    good = sum(_is_num(v) for v in values)
-    return good > 0 and 2 * good > len(values)
-
-
-class _Sniff:
-    """Layout of a text file from its first lines."""
-
-    def __init__(self, head: list[str], delimiter: str | None, display: str, given_delimiter: bool):
-        self.display = display
-        entries = [(i + 1, line.rstrip("\r\n")) for i, line in enumerate(head)]
-        self.comments = [(n, s) for n, s in entries if s.strip().startswith(_COMMENTS)]
-        rows = [(n, s) for n, s in entries if s.strip() and not s.strip().startswith(_COMMENTS)]
-        if not rows:
-            raise DataError(f"{display}: no numeric data (only comments or blank lines)")
-        self.delimiter = delimiter if given_delimiter else self._choose(rows)
-        d = self.delimiter
-        split = [_split(_strip_comment(s), d) for _, s in rows]
-        tail, c, consistent = _tail(split)
-        if not consistent:
-            raise FormatError(
-                f"{display}: not a table of numbers: its last lines split into different numbers of"
-                f" fields ({_DELIMITER_NAMES.get(d, repr(d))} delimiter); if it is a table, give its delimiter"
-                f" with {option_hint('--delimiter', 'delimiter=')}"
-            )
-        self.ncols = c
-        tail = [f for f in tail if len(f) == c]
-        # a column is numeric when most of the last lines hold numbers there: a stray bad value
-        # is then reported with its line number by the parser instead of hiding the column
-        self.numeric = [_mostly_numeric([f[j] for f in tail]) for j in range(c)]
-        self.first_bad = [next((f[j] for f in tail if not _is_num(f[j])), None) for j in range(c)]
-        if not any(self.numeric):
-            raise DataError(f"{display}: no numeric data (no column of the last lines holds numbers)")
-        start = next(
-            k for k, f in enumerate(split)
-            if len(f) == c and all(_is_num(f[j]) for j in range(c) if self.numeric[j])
-        )
-        self.data_line = rows[start][0]
-        self.preamble = rows[:start]
-        self.tail = tail
-        self.header_line: int | None = None
-        names: list[str] | None = None
-        for n, s in self.preamble:
-            f = [s.strip()] if c == 1 else _split(s, d)
-            if len(f) == c and (c > 1 or _single_name(s)):
-                names, self.header_line = f, n
-                break
-        if names is None:
-            before = [(n, s) for n, s in self.comments if n < self.data_line]
-            if before and not any(n > before[-1][0] for n, _ in self.preamble):
-                n, s = before[-1]
-                body = s.strip()
-                for mark in _COMMENTS:
-                    if body.startswith(mark):
-                        body = body[len(mark):].strip()
-                        break
-                f = ([body] if c == 1 else _split(body, d)) if body else []
-                if len(f) == c and (c > 1 or _single_name(body)) and not all(_is_num(x) for x in f):
-                    names, self.header_line = f, n
-        self.has_header = names is not None
-        self.names = self._names(names, c)
-        for n, s in self.preamble:
-            f = _split(_strip_comment(s), d)
-            if n != self.header_line and len(f) == c and c > 1:
-                nums = [j for j in range(c) if self.numeric[j] and _is_num(f[j])]
-                bad = [j for j in range(c) if self.numeric[j] and not _is_num(f[j])]
-                if nums and bad:  # a data line with a damaged value, not a preamble line
-                    j = bad[0]
-                    raise DataError(
-                        f"{display}: line {n}: {_shown(f[j])} in column {self.names[j]!r} is not a number")
-        self.units_line: dict[str, str] = {}
-        after = [(n, s) for n, s in self.preamble if self.header_line and n > self.header_line]
-        for _, s in after:
-            f = _split(s, d)
-            if len(f) == c and _is_units_line(f):
-                self.units_line = {self.names[j]: f[j].strip("[]()") for j in range(c) if f[j]}
-        self.skipped = sum(1 for n, _ in self.preamble if n != self.header_line)
-        self.text = " ".join(s for _, s in self.comments + self.preamble)
-
-    @staticmethod
-    def _names(names: list[str] | None, c: int) -> list[str]:
-        if names is None:
-            return [f"col{j}" for j in range(c)]
-        out: list[str] = []
-        for j, raw in enumerate(names):
-            name = raw.strip().strip('"').strip("'").strip() or f"col{j}"
-            if name in out:
-                name = f"{name}_{j}"
-            out.append(name)
-        return out
-
-    def _choose(self, rows: list[tuple[int, str]]) -> str | None:
-        best: tuple | None = None
-        choice: str | None = None
-        for pref, d in enumerate(_DELIMITERS):
-            split = [_split(_strip_comment(s), d) for _, s in rows]
-            tail, c, consistent = _tail(split)
-            tail = [f for f in tail if len(f) == c]
-            nnum = sum(_mostly_numeric([f[j] for f in tail]) for j in range(c)) if consistent else 0
-            key = (consistent and nnum > 0, nnum, c, -pref)
-            if best is None or key > best:
-                best, choice = key, d
-        assert best is not None
-        if best[2] == 1:
-            choice = None
-        comma_split = _tail([_split(_strip_comment(s), ",") for _, s in rows])[0]
-        if choice == "," and not all(_is_num(x) for f in comma_split for x in f):
-            for alt in (";", "\t", None):
-                tail = _tail([_split(_strip_comment(s), alt) for _, s in rows])[0]
-                if all(len(f) == len(tail[-1]) for f in tail) and all(
-                    all(_is_num(x) or _DECIMAL_COMMA.match(x) for x in f) for f in tail
-                ) and any(_DECIMAL_COMMA.match(x) for f in tail for x in f):
-                    raise FormatError(
-                        f"{self.display}: the numbers use decimal commas (such as {tail[-1][0]!r}),"
-                        " which are not supported; convert them to decimal points"
-                    )
-        return choice
-
-
-def _read_head(text: io.TextIOWrapper, display: str) -> list[str]:
-    head: list[str] = []
-    rows = 0
-    for line in _lines(text):
-        _check_lengths([line], len(head) + 1, display)
-        head.append(line)
-        s = line.strip()
-        if s and not s.startswith(_COMMENTS):
-            rows += 1
-        if rows >= _SNIFF_ROWS or len(head) >= _SNIFF_MAX_LINES:
-            break
-    sample = "".join(head[:200])
-    if "\x00" in sample or sample.count("\ufffd") > max(2, len(sample) // 100):
-        raise FormatError(f"{display}: not a text file (binary content) and not a recognised binary format")
-    if not head:
-        raise DataError(f"{display}: the file is empty")
-    return head
 
 
 def _diagnose(lines: list[str], first: int, sniff: _Sniff, usecols: list[int], int_time: bool,
@@ -397,42 +173,80 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
            hashing: _HashingReader, text: io.TextIOWrapper, head: list[str], sniff: _Sniff,
            compression: str, size: int | None) -> Table:
     names = sniff.names
+    cols = _choose_columns(display, opts, flavour, sniff)
+    data, time, n = _read_rows(display, opts, progress, hashing, text, head, sniff, cols, compression, size)
+    table = Table(
+        format=cols.flavour, columns=tuple(names), data=data, rows=n, sha256="", size=0,
+        time=time, time_name=None if cols.time is None else names[cols.time],
+        time_unit=cols.time_unit, units=_column_units(names, cols.channels, sniff),
+        detail=_detail(names, head, sniff, compression, cols.skipped), unused=cols.unused,
+    )
+    if cols.flavour == "stable32":
+        _as_stable32(table, display, opts, sniff, path, cols)
+    elif cols.time is not None and cols.time_unit is not None:
+        table.time_unit_reason = f"from the column name {names[cols.time]!r}"
+        if time_name(names[cols.time]) is None:
+            table.time_unit_reason = "from the units line"
+    return table
+
+
+@dataclass(frozen=True)
+class _Columns:
+    """Which columns are read: the flavour (csv or stable32), the time column, the channels."""
+
+    flavour: str
+    time: int | None
+    channels: tuple[int, ...]
+    time_unit: str | None
+    skipped: tuple[str, ...]
+    unused: tuple[tuple[str, str], ...]
+
+
+def _choose_columns(display: str, opts: Options, flavour: str | None, sniff: _Sniff) -> _Columns:
+    """The flavour (auto: a lone numeric column, or MJD + value, is Stable32-style) and the columns to read."""
+    names = sniff.names
     numeric_idx = [j for j in range(sniff.ncols) if sniff.numeric[j]]
     imu_named = any(recognise(n).group for n in names)
     if flavour is None:  # auto: a lone numeric column (or MJD + value) is a Stable32-style file
         lone = len(numeric_idx) == 1 or (len(numeric_idx) == 2 and _looks_mjd(sniff, numeric_idx[0]))
         explicit = opts.columns is not None or opts.time_column is not None
         flavour = "stable32" if (lone and not imu_named and not explicit) else "csv"
-
-    time_idx: int | None
-    stated_unit: str | None
     if flavour == "stable32":
-        if len(numeric_idx) not in (1, 2):
-            raise FormatError(
-                f"{display}: a Stable32 data file has one value per line, or MJD and value;"
-                f" found {len(numeric_idx)} numeric columns"
-                f" (use {option_hint('--format csv', repr_kw('format', 'csv'))})"
-            )
-        if opts.columns is not None:
-            raise ParameterError(
-                f"{display}: columns= (--columns) does not apply to Stable32 data files (one value per line)")
-        if len(numeric_idx) == 2:
-            time_idx, chans, stated_unit = numeric_idx[0], (numeric_idx[1],), "d"
-            if opts.time_column is False:
-                raise ParameterError(f"{display}: time_column=False (--time-column none): a two-column Stable32"
-                                     " file has MJD time tags first")
-        else:
-            time_idx, chans, stated_unit = None, (numeric_idx[0],), None
-        skipped: tuple[str, ...] = ()
-        unused: tuple[tuple[str, str], ...] = ()
-    else:
-        sel = select(names, sniff.numeric, columns=opts.columns, time_column=opts.time_column,
-                     path=display, first_bad=sniff.first_bad)
-        time_idx, chans, stated_unit, skipped = sel.time, sel.channels, sel.time_unit, sel.skipped
-        unused = sel.unused
-        if time_idx is not None and stated_unit is None and names[time_idx] in sniff.units_line:
-            stated_unit = time_unit_name(sniff.units_line[names[time_idx]])
+        return _stable32_columns(display, opts, numeric_idx)
+    sel = select(names, sniff.numeric, columns=opts.columns, time_column=opts.time_column,
+                 path=display, first_bad=sniff.first_bad)
+    stated_unit = sel.time_unit
+    if sel.time is not None and stated_unit is None and names[sel.time] in sniff.units_line:
+        stated_unit = time_unit_name(sniff.units_line[names[sel.time]])
+    return _Columns("csv", sel.time, tuple(sel.channels), stated_unit, tuple(sel.skipped), tuple(sel.unused))
 
+
+def _stable32_columns(display: str, opts: Options, numeric_idx: list[int]) -> _Columns:
+    """A Stable32 data file: one value per line, or MJD and value."""
+    if len(numeric_idx) not in (1, 2):
+        raise FormatError(
+            f"{display}: a Stable32 data file has one value per line, or MJD and value;"
+            f" found {len(numeric_idx)} numeric columns"
+            f" (use {option_hint('--format csv', repr_kw('format', 'csv'))})"
+        )
+    if opts.columns is not None:
+        raise ParameterError(
+            f"{display}: columns= (--columns) does not apply to Stable32 data files (one value per line)")
+    if len(numeric_idx) == 2:
+        if opts.time_column is False:
+            raise ParameterError(f"{display}: time_column=False (--time-column none): a two-column Stable32"
+                                 " file has MJD time tags first")
+        return _Columns("stable32", numeric_idx[0], (numeric_idx[1],), "d", (), ())
+    return _Columns("stable32", None, (numeric_idx[0],), None, (), ())
+
+
+def _read_rows(display: str, opts: Options, progress: Progress, hashing: _HashingReader, text: io.TextIOWrapper,
+               head: list[str], sniff: _Sniff, cols: _Columns, compression: str,
+               size: int | None) -> tuple[dict[str, np.ndarray], np.ndarray | None, int]:
+    """The selected columns of every data row, parsed in chunks of CHUNK_ROWS lines into float64 columns
+    (int64 time tags when they exceed 2**53), the buffer grown geometrically within the memory check."""
+    names = sniff.names
+    time_idx, chans = cols.time, cols.channels
     usecols = ([time_idx] if time_idx is not None else []) + list(chans)
     int_time = False
     if time_idx is not None:
@@ -465,36 +279,13 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         if not lines:
             break
         _check_lengths(lines, line_no, display)
-        try:
-            arr = _loadtxt(lines, sniff.delimiter, "#", usecols, dtype, quoted, int_time)
-        except ValueError as exc:
-            if quoted:
-                raise _diagnose(lines, line_no, sniff, usecols, int_time, display, exc) from None
-            try:  # '%' and '//' comments cost numpy a Python call per line: only when needed
-                arr = _loadtxt(lines, sniff.delimiter, _COMMENTS, usecols, dtype, quoted, int_time)
-            except ValueError as exc2:
-                raise _diagnose(lines, line_no, sniff, usecols, int_time, display, exc2) from None
+        arr = _parse_chunk(lines, line_no, sniff, usecols, dtype, quoted, int_time, display)
         m = arr.shape[0]
         if n + m > capacity:
             capacity = max(int(capacity * 1.6), n + m)
             check_allocation(display, 8 * capacity * (k + 1), f"{k} column(s) of {capacity:,} rows read so far")
-            grown = np.empty((k, capacity))
-            grown[:, :n] = buf[:, :n]
-            buf = grown
-            if tbuf is not None:
-                tgrown = np.empty(capacity, dtype=tbuf.dtype)
-                tgrown[:n] = tbuf[:n]
-                tbuf = tgrown
-        if int_time:
-            tbuf[n:n + m] = arr["t"]  # type: ignore[index]
-            for c in range(k):
-                buf[c, n:n + m] = arr[f"c{c}"]
-        else:
-            offset = 0
-            if tbuf is not None:
-                tbuf[n:n + m] = arr[:, 0]
-                offset = 1
-            buf[:, n:n + m] = arr[:, offset:].T
+            buf, tbuf = _grown(buf, tbuf, n, capacity)
+        _store(arr, buf, tbuf, n, int_time, k)
         n += m
         line_no += len(lines)
         progress.update(hashing.nbytes)
@@ -504,8 +295,52 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         buf = buf[:, :n].copy()
         tbuf = None if tbuf is None else tbuf[:n].copy()
     data = {names[j]: buf[c, :n] for c, j in enumerate(chans)}
-    time = None if tbuf is None else tbuf[:n]
+    return data, None if tbuf is None else tbuf[:n], n
 
+
+def _parse_chunk(lines: list[str], line_no: int, sniff: _Sniff, usecols: list[int], dtype: np.dtype,
+                 quoted: bool, int_time: bool, display: str) -> np.ndarray:
+    """One chunk of lines through numpy's loadtxt; a bad line becomes a one-line error naming it."""
+    try:
+        return _loadtxt(lines, sniff.delimiter, "#", usecols, dtype, quoted, int_time)
+    except ValueError as exc:
+        if quoted:
+            raise _diagnose(lines, line_no, sniff, usecols, int_time, display, exc) from None
+        try:  # '%' and '//' comments cost numpy a Python call per line: only when needed
+            return _loadtxt(lines, sniff.delimiter, _COMMENTS, usecols, dtype, quoted, int_time)
+        except ValueError as exc2:
+            raise _diagnose(lines, line_no, sniff, usecols, int_time, display, exc2) from None
+
+
+def _grown(buf: np.ndarray, tbuf: np.ndarray | None, n: int,
+           capacity: int) -> tuple[np.ndarray, np.ndarray | None]:
+    """The column buffers enlarged to ``capacity`` rows, their first ``n`` rows kept."""
+    grown = np.empty((buf.shape[0], capacity))
+    grown[:, :n] = buf[:, :n]
+    if tbuf is None:
+        return grown, None
+    tgrown = np.empty(capacity, dtype=tbuf.dtype)
+    tgrown[:n] = tbuf[:n]
+    return grown, tgrown
+
+
+def _store(arr: np.ndarray, buf: np.ndarray, tbuf: np.ndarray | None, n: int, int_time: bool, k: int) -> None:
+    """A parsed chunk into the column buffers from row ``n``."""
+    m = arr.shape[0]
+    if int_time:
+        tbuf[n:n + m] = arr["t"]  # type: ignore[index]
+        for c in range(k):
+            buf[c, n:n + m] = arr[f"c{c}"]
+        return
+    offset = 0
+    if tbuf is not None:
+        tbuf[n:n + m] = arr[:, 0]
+        offset = 1
+    buf[:, n:n + m] = arr[:, offset:].T
+
+
+def _column_units(names: list[str], chans: Sequence[int], sniff: _Sniff) -> dict[str, str]:
+    """Each channel's unit from its name, its brackets or the units line (recorded as written)."""
     units = {}
     for j in chans:
         rec = recognise(names[j])
@@ -516,7 +351,11 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
             units[names[j]] = bracket
         elif names[j] in sniff.units_line:
             units[names[j]] = canonical_unit(sniff.units_line[names[j]]) or sniff.units_line[names[j]]
+    return units
 
+
+def _detail(names: list[str], head: list[str], sniff: _Sniff, compression: str, skipped: Sequence[str]) -> str:
+    """How the file was read, for the log's source line."""
     parts = [_DELIMITER_NAMES.get(sniff.delimiter, repr(sniff.delimiter)) + "-separated"]
     if compression:
         parts.insert(0, f"{compression}-compressed")
@@ -531,32 +370,26 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
         parts.append("EuRoC/ASL imu0/data.csv layout")
     if skipped:
         parts.append(f"numeric columns not recognised as IMU channels left out: {', '.join(skipped)}")
-    table = Table(
-        format=flavour, columns=tuple(names), data=data, rows=n, sha256="", size=0,
-        time=time, time_name=None if time_idx is None else names[time_idx],
-        time_unit=stated_unit, units=units, detail="; ".join(parts), unused=unused,
-    )
-    if flavour == "stable32":
-        dtype_name = opts.data_type or _stable32_type(sniff, path)
-        if dtype_name is None:
-            raise ParameterError(
-                f"{display}: cannot tell whether this Stable32-style file holds phase or frequency data"
-                " (neither or both words in its header and name); give it with"
-                f" {_DATA_TYPE_HINT}"
-            )
-        (name,) = data
-        table.data_type = dtype_name
-        table.rename = {name: dtype_name}
-        table.groups = {name: dtype_name}
-        table.unit_origin = "format"
-        table.units = {name: "s"} if dtype_name == "phase" else {}
-        if time_idx is not None:
-            table.time_unit_reason = "Stable32 time tags (MJD)"
-    elif time_idx is not None and stated_unit is not None:
-        table.time_unit_reason = f"from the column name {names[time_idx]!r}"
-        if time_name(names[time_idx]) is None:
-            table.time_unit_reason = "from the units line"
-    return table
+    return "; ".join(parts)
+
+
+def _as_stable32(table: Table, display: str, opts: Options, sniff: _Sniff, path: Path, cols: _Columns) -> None:
+    """A Stable32-style table: its data type (option, header or name), channel name and units."""
+    dtype_name = opts.data_type or _stable32_type(sniff, path)
+    if dtype_name is None:
+        raise ParameterError(
+            f"{display}: cannot tell whether this Stable32-style file holds phase or frequency data"
+            " (neither or both words in its header and name); give it with"
+            f" {_DATA_TYPE_HINT}"
+        )
+    (name,) = table.data
+    table.data_type = dtype_name
+    table.rename = {name: dtype_name}
+    table.groups = {name: dtype_name}
+    table.unit_origin = "format"
+    table.units = {name: "s"} if dtype_name == "phase" else {}
+    if cols.time is not None:
+        table.time_unit_reason = "Stable32 time tags (MJD)"
 
 
 @register("csv", extensions=(".csv", ".tsv", ".txt", ".tab", ".asc", ".log"),

@@ -125,47 +125,8 @@ def process(
     """
     check_times(raw, name=time_name, path=path)
     actions: list[str] = []
-
-    back = np.flatnonzero(raw[1:] < raw[:-1])
-    n_back = int(back.size)
-    if n_back:
-        i = int(back[0]) + 1
-        text = f"{n_back} timestamp(s) go backwards (first at {_where(i, raw)}, after {_value(raw[i - 1])})"
-        if unsorted == "refuse":
-            raise DataError(f"{path}: {text}; to sort the samples by time use"
-                            f" {option_hint('--unsorted sort', repr_kw('unsorted', 'sort'))}")
-        order = np.argsort(raw, kind="stable")
-        raw = raw[order]
-        channels = {k: v[order] for k, v in channels.items()}
-        actions.append(f"sorted the samples by time ({n_back} out of order)")
-        warnings.append(f"{path}: {text}; sorted the samples by time")
-
-    same = np.flatnonzero(raw[1:] == raw[:-1]) + 1
-    n_dup = int(same.size)
-    differing = 0
-    if n_dup:
-        # the kept sample of each run of equal timestamps is the one before the run
-        run_start = np.concatenate(([True], np.diff(same) != 1))
-        kept = np.maximum.accumulate(np.where(run_start, same - 1, 0))
-        diff_any = np.zeros(n_dup, dtype=bool)
-        for v in channels.values():
-            diff_any |= ~((v[same] == v[kept]) | (np.isnan(v[same]) & np.isnan(v[kept])))
-        differing = int(diff_any.sum())
-        i = int(same[0])
-        text = (
-            f"{n_dup} sample(s) repeat the timestamp before them ({differing} with different values;"
-            f" first at {_where(i, raw)})"
-        )
-        if duplicates == "refuse":
-            raise DataError(f"{path}: {text}; to keep the first of each use"
-                            f" {option_hint('--duplicates drop', repr_kw('duplicates', 'drop'))}")
-        keep = np.ones(raw.size, dtype=bool)
-        keep[same] = False
-        raw = raw[keep]
-        channels = {k: v[keep] for k, v in channels.items()}
-        actions.append(f"dropped {n_dup} duplicated timestamp(s) ({differing} with different values)")
-        warnings.append(f"{path}: {text}; kept the first of each")
-
+    raw, channels, n_back = _sorted(raw, channels, unsorted, path, actions, warnings)
+    raw, channels, n_dup, differing = _deduplicated(raw, channels, duplicates, path, actions, warnings)
     m = raw.size
     if m < 2:
         raise DataError(f"{path}: only {m} distinct timestamp(s); at least 2 are needed to tell the rate")
@@ -198,6 +159,56 @@ def process(
         verb = "split the log at" if gaps == "split" else "ignored"
         report = replace(report, actions=report.actions + (f"{verb} {len(report.gaps)} gap(s)",))
     return t, channels, report, time_origin
+
+
+def _sorted(raw: np.ndarray, channels: dict[str, np.ndarray], unsorted: UnsortedPolicy, path: str,
+            actions: list[str], warnings: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], int]:
+    """Timestamps that go backwards: refused, or the samples sorted by time (stable). Returns the count."""
+    back = np.flatnonzero(raw[1:] < raw[:-1])
+    n_back = int(back.size)
+    if n_back:
+        i = int(back[0]) + 1
+        text = f"{n_back} timestamp(s) go backwards (first at {_where(i, raw)}, after {_value(raw[i - 1])})"
+        if unsorted == "refuse":
+            raise DataError(f"{path}: {text}; to sort the samples by time use"
+                            f" {option_hint('--unsorted sort', repr_kw('unsorted', 'sort'))}")
+        order = np.argsort(raw, kind="stable")
+        raw = raw[order]
+        channels = {k: v[order] for k, v in channels.items()}
+        actions.append(f"sorted the samples by time ({n_back} out of order)")
+        warnings.append(f"{path}: {text}; sorted the samples by time")
+    return raw, channels, n_back
+
+
+def _deduplicated(raw: np.ndarray, channels: dict[str, np.ndarray], duplicates: DuplicatesPolicy, path: str,
+                  actions: list[str], warnings: list[str]) -> tuple[np.ndarray, dict[str, np.ndarray], int, int]:
+    """Repeated timestamps: refused, or the first sample of each kept. Returns the counts (all, differing)."""
+    same = np.flatnonzero(raw[1:] == raw[:-1]) + 1
+    n_dup = int(same.size)
+    if not n_dup:
+        return raw, channels, 0, 0
+    # the kept sample of each run of equal timestamps is the one before the run
+    run_start = np.concatenate(([True], np.diff(same) != 1))
+    kept = np.maximum.accumulate(np.where(run_start, same - 1, 0))
+    diff_any = np.zeros(n_dup, dtype=bool)
+    for v in channels.values():
+        diff_any |= ~((v[same] == v[kept]) | (np.isnan(v[same]) & np.isnan(v[kept])))
+    differing = int(diff_any.sum())
+    i = int(same[0])
+    text = (
+        f"{n_dup} sample(s) repeat the timestamp before them ({differing} with different values;"
+        f" first at {_where(i, raw)})"
+    )
+    if duplicates == "refuse":
+        raise DataError(f"{path}: {text}; to keep the first of each use"
+                        f" {option_hint('--duplicates drop', repr_kw('duplicates', 'drop'))}")
+    keep = np.ones(raw.size, dtype=bool)
+    keep[same] = False
+    raw = raw[keep]
+    channels = {k: v[keep] for k, v in channels.items()}
+    actions.append(f"dropped {n_dup} duplicated timestamp(s) ({differing} with different values)")
+    warnings.append(f"{path}: {text}; kept the first of each")
+    return raw, channels, n_dup, differing
 
 
 def _gap_text(report: TimingReport, n: int) -> str:

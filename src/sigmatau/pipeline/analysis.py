@@ -31,15 +31,14 @@ import os
 import time
 import warnings
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
-from .._version import __version__
 from ..uncertainty.confidence import ONE_SIGMA
 from ..errors import DataError, ParameterError, SigmaTauError
 from ..core.result import StabilityResult
+from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TERMS, json_ready
 
 __all__ = [
     "DEFAULT_STATISTICS",
@@ -62,231 +61,11 @@ DEFAULT_STATISTICS = ("oadev", "mdev", "tdev", "ohdev", "totdev", "theoh")
 STATISTICS = ("stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev",
               "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms")
 
-#: Groups whose channels get an IMU noise model.
-IMU_GROUPS = ("gyro", "accel")
-
-#: Terms of the IMU model, in order.
-TERMS = ("Q", "N", "B", "K", "R")
-
-#: SI unit of each term, per sensor kind (what presets are given in).
-SI_TERM_UNITS = {
-    "gyro": {"Q": "rad", "N": "rad/s/sqrt(Hz)", "B": "rad/s", "K": "rad/s^2/sqrt(Hz)", "R": "rad/s^2"},
-    "accel": {"Q": "m/s", "N": "m/s^2/sqrt(Hz)", "B": "m/s^2", "K": "m/s^3/sqrt(Hz)", "R": "m/s^3"},
-}
 
 Reference = Mapping[str, Mapping[str, "tuple[float, str]"]]
 
 
-@dataclass(frozen=True)
-class ChannelAnalysis:
-    """Everything computed for one channel.
-
-    Attributes
-    ----------
-    name, group, unit : str
-        Channel name, its group ("gyro", "accel", "freq", "phase", "other" …)
-        and the unit of its samples ("" when unknown).
-    n_samples : int
-    results : mapping of str to StabilityResult
-        Statistic name → result, in the order asked for.
-    skipped : mapping of str to str
-        Statistic name → why it was not computed (record too short …).
-    model : NoiseModel or None
-        The IMU noise model (gyro and accel channels with a known unit).
-    model_note : str
-        Why there is no model, when there is none.
-    datasheet : tuple of dict
-        Datasheet comparison rows (:meth:`sigmatau.imu.NoiseModel.compare`).
-    seconds : float
-        Wall time spent on the channel.
-    """
-
-    name: str
-    group: str
-    unit: str
-    n_samples: int
-    results: Mapping[str, StabilityResult]
-    skipped: Mapping[str, str]
-    model: Any = None
-    model_note: str = ""
-    datasheet: tuple[dict, ...] = ()
-    seconds: float = 0.0
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary (NaN and inf as None)."""
-        return json_ready({
-            "name": self.name, "group": self.group, "unit": self.unit, "n_samples": self.n_samples,
-            "statistics": {k: r.to_dict() for k, r in self.results.items()},
-            "skipped": dict(self.skipped),
-            "model": self.model.to_dict() if self.model is not None else None,
-            "model_note": self.model_note,
-            "datasheet": list(self.datasheet),
-            "seconds": self.seconds,
-        })
-
-
-@dataclass(frozen=True)
-class LogAnalysis:
-    """The analysis of one log (see :func:`analyze_log`).
-
-    Attributes
-    ----------
-    log : SensorLog
-        The log analysed (the segment, when the log was split at gaps).
-    channels : tuple of ChannelAnalysis
-    settings : dict
-        Every setting that shaped the result.
-    kalibr : dict or None
-        :func:`sigmatau.imu.kalibr_config` of the gyro and accel models.
-    kalibr_note : str
-        Why there is no Kalibr entry, when there is none.
-    notes : tuple of str
-        What was done to the data on the way (segment chosen …).
-    warnings : tuple of str
-        Warnings issued during the analysis, each once (those of the IMU model
-        are in each model's ``flags``).
-    version : str
-        sigmatau version.
-    seconds : float
-        Wall time of the analysis.
-    """
-
-    log: Any
-    channels: tuple[ChannelAnalysis, ...]
-    settings: Mapping[str, Any]
-    kalibr: Optional[dict] = None
-    kalibr_note: str = ""
-    notes: tuple[str, ...] = ()
-    warnings: tuple[str, ...] = ()
-    version: str = __version__
-    seconds: float = 0.0
-
-    def channel(self, name: str) -> ChannelAnalysis:
-        """The analysis of one channel by name."""
-        for ch in self.channels:
-            if ch.name == name:
-                return ch
-        raise ParameterError(f"no channel {name!r}; channels are: {', '.join(c.name for c in self.channels)}")
-
-    def groups(self) -> dict[str, list[ChannelAnalysis]]:
-        """Channels by group, in log order."""
-        out: dict[str, list[ChannelAnalysis]] = {}
-        for ch in self.channels:
-            out.setdefault(ch.group, []).append(ch)
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dictionary of everything (NaN and inf as None)."""
-        return json_ready({
-            "tool": {"name": "sigmatau", "version": self.version},
-            "input": {"path": self.log.source.path, "format": self.log.source.format,
-                      "sha256": self.log.source.sha256, "size": self.log.source.size,
-                      "topic": self.log.source.topic},
-            "log": self.log.to_dict(),
-            "settings": dict(self.settings),
-            "notes": list(self.notes),
-            "warnings": list(self.warnings),
-            "channels": [c.to_dict() for c in self.channels],
-            "kalibr": self.kalibr,
-            "kalibr_note": self.kalibr_note,
-            "seconds": self.seconds,
-        })
-
-    def summary(self) -> str:
-        """Terminal summary: data checks, then per channel the model (SI and customary units) and flags."""
-        log = self.log
-        from ..imu.model import format_duration
-
-        lines = [f"sigmatau {self.version}: {log.source.path} ({log.source.format}), {len(log.channels)} channel(s)"
-                 f" × {len(log)} samples at {log.rate:.6g} Hz ({format_duration(len(log) / log.rate)})"]
-        lines.append("timing: " + log.timing.summary().replace("\n", "\n  "))
-        lines += [f"note: {n}" for n in self.notes]
-        for ch in self.channels:
-            lines.append("")
-            got = ", ".join(ch.results) or "none"
-            lines.append(f"[{ch.name}] {ch.group}, unit {ch.unit or '?'}: statistics {got}")
-            for stat, why in ch.skipped.items():
-                lines.append(f"  {stat}: not computed — {why}")
-            if ch.model is not None:
-                lines.append(_model_lines(ch.model))
-            elif ch.model_note:
-                lines.append(f"  no IMU model: {ch.model_note}")
-            for row in ch.datasheet:
-                verdict = "covers" if row["covers"] else "does not cover"
-                lines.append(f"  datasheet {row['term']} = {row['reference_given']}: interval {verdict} it"
-                             + (f" (ratio {row['ratio']:.3g})" if row.get("ratio") else ""))
-        if self.kalibr is not None:
-            k = self.kalibr
-            lines.append("")
-            lines.append(f"Kalibr imu.yaml ({k['axis_rule']}): gyroscope_noise_density"
-                         f" {k['gyroscope_noise_density']:.4g}, gyroscope_random_walk {k['gyroscope_random_walk']:.4g},"
-                         f" accelerometer_noise_density {k['accelerometer_noise_density']:.4g},"
-                         f" accelerometer_random_walk {k['accelerometer_random_walk']:.4g}")
-            if k["bounds_used"]:
-                lines.append("  upper bounds used (not resolved): " + ", ".join(k["bounds_used"]))
-            if k.get("axes_note"):
-                lines.append(f"  fewer than three axes: {k['axes_note']}")
-        elif self.kalibr_note:
-            lines.append("")
-            lines.append(f"no Kalibr imu.yaml: {self.kalibr_note}")
-        if self.warnings:
-            lines.append("")
-            lines.append("warnings:")
-            lines += [f"  - {w}" for w in self.warnings]
-        return "\n".join(lines)
-
-
-def _model_lines(model: Any) -> str:
-    """The model as indented lines: each term in SI and customary units, then the flags."""
-    out = []
-    for t in TERMS:
-        p = getattr(model, t)
-        si = p.si()
-        cust = "; ".join(format_parameter(c) for c in p.customary())
-        out.append(f"  {t} {_TERM_NAMES[model.kind][t]:<26} {format_parameter(si):<44} {cust}")
-    for f in model.flags:
-        out.append(f"  ! [{f.code}{' ' + f.term if f.term else ''}] {f.message}")
-    return "\n".join(out)
-
-
-_TERM_NAMES = {
-    "gyro": {"Q": "(angle quantisation)", "N": "(angle random walk)", "B": "(bias instability)",
-             "K": "(rate random walk)", "R": "(rate ramp)"},
-    "accel": {"Q": "(velocity quantisation)", "N": "(velocity random walk)", "B": "(bias instability)",
-              "K": "(acceleration random walk)", "R": "(acceleration ramp)"},
-}
-
-
-def format_parameter(p: Any) -> str:
-    """``value [low, high] unit``, ``< bound unit`` when not resolved (terminal and report)."""
-    from ..imu.units import pretty
-
-    if not p.resolved:
-        return f"< {p.high:.3g} {pretty(p.unit)}" if math.isfinite(p.high) else "not resolved"
-    return f"{p.value:.4g} [{p.low:.4g}, {p.high:.4g}] {pretty(p.unit)}"
-
-
 # ----------------------------------------------------------------------- helpers
-
-
-def json_ready(obj: Any) -> Any:
-    """``obj`` with numpy scalars/arrays as Python values and NaN/inf as None (strict JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): json_ready(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_ready(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return json_ready(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if obj is None or isinstance(obj, str):
-        return obj
-    return str(obj)
 
 
 def log_from_arrays(channels: Mapping[str, Any], *, rate: float, units: Optional[Mapping[str, str]] = None,
@@ -543,8 +322,6 @@ def analyze_log(
     χ² interval (numerics.md §5, §7). The model is :func:`sigmatau.imu.analyze`
     and its OADEV curve is the one reported as ``oadev``.
     """
-    from ..imu.model import kalibr_config
-
     t0 = time.perf_counter()
     stats = check_statistics(statistics)
     if axis_rule not in ("max", "rms", "mean"):
@@ -552,29 +329,62 @@ def analyze_log(
     if not isinstance(confidence, (int, float)) or isinstance(confidence, bool) or not 0 < confidence < 1:
         raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
     reference = datasheet_reference(datasheet)
-    notes: list[str] = []
-    if log.timing.gaps and log.timing.gaps_policy == "split":
-        segments = log.segments(min_samples=2)
-        if not segments:
-            raise DataError("no gap-free segment of at least 2 samples")
-        best = max(range(len(segments)), key=lambda i: len(segments[i]))
-        seg = segments[best]
-        notes.append(f"split at {len(log.timing.gaps)} gap(s) into {len(segments)} segments; analysed the"
-                     f" longest, segment {best + 1} ({len(seg)} of {len(log)} samples)")
-        log = seg
+    log, notes = _longest_segment(log)
+    names = _channel_names(log, channels)
+    workers = _worker_count(workers, len(names))
+    done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress)
+    kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
+    settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
+                list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
+                "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
+                "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
+                "workers": workers}
+    return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
+                       notes=tuple(notes), warnings=tuple(seen),
+                       seconds=time.perf_counter() - t0)
+
+
+def _longest_segment(log: Any) -> tuple[Any, list[str]]:
+    """The log to analyse and a note: a log read with ``gaps="split"`` gives its longest gap-free segment."""
+    if not (log.timing.gaps and log.timing.gaps_policy == "split"):
+        return log, []
+    segments = log.segments(min_samples=2)
+    if not segments:
+        raise DataError("no gap-free segment of at least 2 samples")
+    best = max(range(len(segments)), key=lambda i: len(segments[i]))
+    seg = segments[best]
+    note = (f"split at {len(log.timing.gaps)} gap(s) into {len(segments)} segments; analysed the"
+            f" longest, segment {best + 1} ({len(seg)} of {len(log)} samples)")
+    return seg, [note]
+
+
+def _channel_names(log: Any, channels: Optional[Sequence[str]]) -> list[str]:
+    """The channels asked for (default all), each checked to exist."""
     names = list(log.names) if channels is None else [str(c) for c in channels]
     for n in names:
         log[n]  # one-line error naming the channels that exist
     if not names:
         raise DataError("the log has no channels")
+    return names
+
+
+def _worker_count(workers: Optional[int], n_channels: int) -> int:
+    """Threads to analyse the channels with: the request (default the usable cores), at most one per channel."""
     if workers is None:
         workers = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ParameterError(f"workers={workers!r} must be a positive integer")
-    workers = min(workers, len(names))
+    return min(workers, n_channels)
+
+
+def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: Any, confidence: float,
+                      reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
+                      progress: Optional[Callable[[str], None]]) -> tuple[list[ChannelAnalysis], list[str]]:
+    """Every channel analysed (in threads), and the distinct warnings they raised."""
+    from ..imu.model import ImuWarning
 
     def one(name: str) -> ChannelAnalysis:
-        ch = _channel(log, name, stats, taus, float(confidence), reference, model)
+        ch = _channel(log, name, stats, taus, confidence, reference, model)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch
@@ -589,8 +399,6 @@ def analyze_log(
                 done = list(pool.map(one, names))
     if not any(c.results for c in done):
         raise DataError(_nothing_computed(len(log), done[0]))
-    from ..imu.model import ImuWarning
-
     seen: list[str] = []
     for w in caught:
         if issubclass(w.category, ImuWarning):  # already in the model's flags, with their channel
@@ -598,9 +406,14 @@ def analyze_log(
         text = f"{w.category.__name__}: {w.message}"
         if text not in seen:
             seen.append(text)
+    return done, seen
 
-    kalibr = None
-    kalibr_note = ""
+
+def _kalibr_entry(done: Sequence[ChannelAnalysis], model: bool, axis_rule: str, inflate: float,
+                  rostopic: str) -> tuple[Optional[dict[str, Any]], str]:
+    """The Kalibr values from the gyro and accel models (or None) and a note when there are none."""
+    from ..imu.model import kalibr_config
+
     gyro = [c.model for c in done if c.group == "gyro" and c.model is not None]
     accel = [c.model for c in done if c.group == "accel" and c.model is not None]
     if gyro and accel:
@@ -612,14 +425,8 @@ def analyze_log(
         short = [f"{sensor} from {len(axes)} of 3 axes ({', '.join(axes)})"
                  for sensor, axes in kalibr["axes"].items() if len(axes) < 3]
         kalibr["axes_note"] = "; ".join(short)
-    elif model:
+        return kalibr, ""
+    if model:
         missing = [g for g, ms in (("gyroscope", gyro), ("accelerometer", accel)) if not ms]
-        kalibr_note = f"Kalibr needs both sensors; no {' and no '.join(missing)} model"
-    settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
-                list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
-                "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
-                "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
-                "workers": workers}
-    return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
-                       notes=tuple(notes), warnings=tuple(seen),
-                       seconds=time.perf_counter() - t0)
+        return None, f"Kalibr needs both sensors; no {' and no '.join(missing)} model"
+    return None, ""

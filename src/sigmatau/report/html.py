@@ -54,7 +54,7 @@ def _pretty(unit: str) -> str:
 
 
 def _param(p: Any) -> str:
-    from ..pipeline.analysis import format_parameter
+    from ..pipeline.results import format_parameter
 
     return _e(format_parameter(p))
 

@@ -35,7 +35,7 @@ _DOC_COMMON = """
     taus : {"octave", "decade", "all", "log"} or array_like
         τ grid as a keyword, or τ values in seconds (rounded to multiples of τ0).
         Keyword grids stop at the statistic's default limit (see
-        :mod:`sigmatau.taus`).
+        :mod:`sigmatau.core.taus`).
     m : int or array_like, optional
         Explicit averaging factors instead of ``taus``.
     points_per_decade : int

@@ -13,7 +13,7 @@ entirely inside the record are kept, so no start-up transient reaches the mean.
 
 This module is written to be read, not to be fast: each filter is applied
 literally, the moving average costs O(N·m). The fast estimators in
-:mod:`sigmatau.allan` and :mod:`sigmatau.hadamard` are tested against it on
+:mod:`sigmatau.stats.allan` and :mod:`sigmatau.stats.hadamard` are tested against it on
 every noise type. The decimation keeps samples 0, m, 2m, …, which makes every
 non-overlapped variance here identical to its NIST SP 1065 estimator (the
 ``⌊M/m⌋`` non-overlapped averages start at sample 0).

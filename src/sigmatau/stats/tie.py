@@ -168,9 +168,9 @@ def mtie(
     --------
     The NBS frequency set integrated from 0 (its mean frequency, 0.49, dominates):
 
-    >>> import sigmatau.tie
+    >>> import sigmatau
     >>> from sigmatau.datasets import nbs1000
-    >>> r = sigmatau.tie.mtie(nbs1000(), m=[1, 10, 100])
+    >>> r = sigmatau.mtie(nbs1000(), m=[1, 10, 100])
     >>> [float(f"{d:.6e}") for d in r.dev], r.n.tolist()
     ([0.9957453, 7.59656, 55.38177], [1000, 991, 901])
     """
@@ -204,9 +204,9 @@ def tierms(
 
     Examples
     --------
-    >>> import sigmatau.tie
+    >>> import sigmatau
     >>> from sigmatau.datasets import nbs1000
-    >>> r = sigmatau.tie.tierms(nbs1000(), m=[1, 10, 100])
+    >>> r = sigmatau.tierms(nbs1000(), m=[1, 10, 100])
     >>> [float(f"{d:.6e}") for d in r.dev]
     [0.5683385, 4.975004, 49.42407]
     """

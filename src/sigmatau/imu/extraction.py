@@ -1,0 +1,473 @@
+"""Extract the IMU noise model of one channel: :func:`analyze` and :func:`from_curve`.
+
+:func:`analyze` is a composition of named steps: check the options
+(``_check_options``), get the OADEV curve from the samples with the data
+checks (``_curve_of_samples``) or validate a given curve (``_check_result``),
+settle the EDF of each τ (``_usable_points``), fit the model
+(:mod:`~sigmatau.imu.fitting`), read the terms off the curve
+(:mod:`~sigmatau.imu.readoffs`), compare both (``_compare``), add the model's own
+flags (``_model_flags``) and warn (``_warn_flags``).
+
+``analyze`` itself stays longer than the ~80-line goal: its docstring (~150
+lines) is the method's public reference (``help()``, the API documentation), and
+splitting it would scatter the description of one computation; its body is a
+short composition of the steps above.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Any, Literal, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from ..core.result import StabilityResult
+from ..core.validate import as_series, check_rate
+from ..errors import DataError, ParameterError
+from ..stats.allan import oadev
+from ..uncertainty.confidence import ONE_SIGMA, edf_array
+from . import checks as checks_module
+from .checks import DataChecks, check_samples
+from .fitting import _Fit, _fit_model, _fit_parameters
+from .noisemodel import NoiseModel
+from .readoffs import _readoffs
+from .results import Flag, Parameter, Region
+from .terms import _NAMES, ImuWarning
+from .units import TERMS, SensorUnit, pretty, sensor_unit
+
+__all__ = ["analyze", "from_curve", "DEVIATION_RANGE"]
+
+#: Deviations (sample unit) within which the model's fit and covariance are computed in float64:
+#: the covariance of c = σ² terms goes as the fourth power of the data's scale.
+DEVIATION_RANGE = (1e-60, 1e60)
+
+
+def from_curve(taus: Sequence[float], dev: Sequence[float], *, rate: float, n_samples: int,
+               statistic: Literal["oadev", "adev"] = "oadev") -> StabilityResult:
+    """Wrap an Allan-deviation curve computed elsewhere as a :class:`StabilityResult`.
+
+    Parameters
+    ----------
+    taus, dev : array_like
+        Averaging times (s) and deviations.
+    rate : float
+        Sample rate of the data behind the curve (Hz); ``m = round(τ·rate)``.
+    n_samples : int
+        Number of samples behind the curve (sets the EDF). When unknown, a
+        lower bound keeps the intervals conservative.
+    statistic : {"oadev", "adev"}
+        Overlapping (default) or non-overlapping estimator.
+
+    Returns
+    -------
+    StabilityResult
+        Without EDF: :func:`analyze` fills it from the noise type its fit finds
+        at each τ.
+
+    Examples
+    --------
+    >>> from sigmatau.imu import from_curve
+    >>> r = from_curve([0.01, 0.1, 1.0], [1e-3, 3.2e-4, 1e-4], rate=100.0, n_samples=100000)
+    >>> r.m.tolist()
+    [1, 10, 100]
+    """
+    rate_f = check_rate(rate)
+    t = as_series(taus, "taus")
+    d = as_series(dev, "dev")
+    if t.size != d.size:
+        raise DataError(f"taus ({t.size}) and dev ({d.size}) must have the same length")
+    if np.any(t <= 0) or np.any(np.diff(t) <= 0) or np.any(d < 0):
+        raise DataError("taus must be positive and increasing, dev non-negative")
+    if statistic not in ("oadev", "adev"):
+        raise ParameterError(f"statistic={statistic!r} must be 'oadev' or 'adev'")
+    if isinstance(n_samples, bool) or not isinstance(n_samples, (int, np.integer)) or n_samples < 3:
+        raise ParameterError(f"n_samples={n_samples!r} must be an integer >= 3")
+    m = np.maximum(1, np.round(t * rate_f)).astype(np.int64)
+    if np.any(2 * m > n_samples):
+        raise DataError(f"τ up to {t[-1]:g} s needs more than n_samples={n_samples} samples")
+    n_terms = n_samples + 1 - 2 * m if statistic == "oadev" else (n_samples // m) - 1
+    return StabilityResult(statistic=statistic, taus=t, m=m, var=d * d, dev=d, n=n_terms, rate=rate_f,
+                           data_type="freq", n_points=int(n_samples) + 1)
+
+
+def analyze(
+    samples: Union[StabilityResult, Sequence[float], np.ndarray],
+    *,
+    rate: Optional[float] = None,
+    unit: str,
+    scale: float = 1.0,
+    increments: bool = False,
+    taus: Any = "octave",
+    confidence: float = ONE_SIGMA,
+    terms: Sequence[str] = TERMS,
+    min_significance: float = 3.0,
+    checks: bool = True,
+    lsb: Optional[float] = None,
+    odr: Optional[float] = None,
+    full_scale: Optional[float] = None,
+) -> NoiseModel:
+    """Extract the IMU noise model (Q, N, B, K, R) of one channel, with intervals.
+
+    Parameters
+    ----------
+    samples : array_like or StabilityResult
+        Static-log samples of one axis (rate for a gyroscope, specific force for
+        an accelerometer), or an OADEV/ADEV curve already computed (with
+        :func:`sigmatau.oadev` or :func:`from_curve`).
+    rate : float
+        Sample rate in Hz (taken from the result when one is given).
+    unit : str
+        Unit of the samples (after ``scale``), required: ``"rad/s"``,
+        ``"deg/s"``, ``"deg/h"``, ``"mdps"``, ``"m/s^2"``, ``"g"``, ``"mg"`` …
+        (:func:`sigmatau.units.sensor_unit`). It sets the sensor kind and the
+        unit of every parameter; there is no default, so a wrong unit cannot
+        slip through silently.
+    scale : float
+        Factor from raw samples (e.g. counts) to ``unit``.
+    increments : bool
+        The samples are delta-angle / delta-velocity increments per sample (in
+        ``unit``·s); they are divided by τ0.
+    taus : {"octave", "log", …} or array_like
+        τ grid of the OADEV curve (see :func:`sigmatau.oadev`).
+    confidence : float
+        Two-sided coverage of the intervals (default ±1σ, 0.683).
+    terms : sequence of str
+        Terms of the model to consider (default all five).
+    min_significance : float
+        The fit keeps a term only if its squared coefficient is at least this
+        many standard errors above zero.
+    checks : bool
+        Run :func:`sigmatau.checks.check_samples` (raw samples only).
+    lsb, odr, full_scale : float, optional
+        Passed to the data checks (known LSB, the sensor's own output rate,
+        its full scale), all in ``unit``.
+
+    Returns
+    -------
+    NoiseModel
+
+    Notes
+    -----
+    *Curve.* OADEV of the samples with χ² intervals from the Greenhall EDF at
+    the noise type identified at each τ (:func:`sigmatau.oadev`, ``ci="chi2"``).
+    A first fit gives the term dominant at each τ; the EDF under that noise
+    type fills the τ without one (a curve given without EDF) and, where it is
+    smaller than the EDF of the identified type, replaces it (the
+    identification is unreliable with the few averages of the longest τ).
+
+    *Read-offs.* The local log–log slope at each τ is the EDF-weighted
+    regression slope over ±0.31 decade (widened up to ±0.81 decade where its
+    standard error exceeds 0.1). A term's region is the longest run of τ where
+    that slope is within ±0.15 of the term's slope with a standard error ≤ 0.2,
+    spanning at least an octave (two for B, whose flat bottom must be wider
+    than the ≈1.2 octaves over which the crossing of a −½ and a +½ line looks
+    flat). A line of the fixed slope is fitted to ln σ and read at the term's τ
+    (N at 1 s, K at 3 s, Q at √3 s, R at √2 s; B = level/0.6643), with EDF
+    weights tapered by ``exp(−(δ/0.05)²)`` for a point whose slope is δ off.
+    Its interval is the χ² interval of the effective EDF ``1/(2·var ln σ̂)``
+    of that weighted mean, correlated τ accounted for (see *Fit*), widened on
+    both sides by the weighted mean of ``|½ ln(1 − 2δ)|``: the offset from the
+    line of a point that holds a share 2δ of a neighbouring term (or sits under
+    a filter). That is the rule without a fit; :func:`analyze` first subtracts
+    from each point of the region the share of the other terms of the
+    unconstrained fit (below), ``net = σ² − Σ_{k≠term} A_k c_k``, leaves out the
+    points where that share exceeds ¾, reads the line through ``½ ln net`` with
+    weights ``ν/(σ²/net)²`` and adds the propagated covariance of the
+    subtracted coefficients to the variance of the level (no widening then).
+    The flat region of B holds N²/τ and K²τ/3 as well: without the subtraction
+    its read-off came out 1.1–1.3× the truth. *Bound rule* when no region exists: the lowest one-sided upper
+    limit of σ(τ) over the k τ of the curve, each at level ``1 − (1 − p)/(2k)``
+    (so that the bound holds at ``(1 + p)/2`` however the lowest point was
+    picked), carried along the term's slope to its read-off τ: in practice the
+    longest τ for K and R, the shortest for Q and N, the lowest point for B
+    (σ_min/0.6643).
+
+    *Fit.* ``σ²(τ) = 3Q²/τ² + N²/τ + (2 ln 2/π)B² + K²(τ/3 + τ0²/(6τ)) + R²τ²/2``
+    (the random-walk column is exact for point samples), weighted least
+    squares with weights from the model variance's standard error
+    ``σ²·√(2/ν)`` (three reweighting passes), the squared coefficients
+    non-negative except that of 3/τ²: a negative one is the sensor's low-pass
+    filter, ``AVAR ≈ N²/τ·(1 − τ_f/τ)`` at the shortest τ, reported as
+    ``filter_time`` and flagged (Q is then masked). When the full model leaves
+    a χ² beyond the 10⁻⁴ tail of its distribution (a scaled χ² with the mean
+    ``tr M`` and variance ``2 tr M²``, ``M = (I − H)C(I − H)ᵀ``, of residuals
+    correlated across τ as modelled) — a real curve with features the model
+    lacks — a relative discrepancy ε per τ is added in quadrature to every
+    point's uncertainty, chosen to bring χ² to its expectation, and flagged.
+    The covariance is the sandwich
+    ``B AᵀW C W A B`` with the correlation of the variance estimates at
+    neighbouring τ: one octave apart 0.5 (white), 0.7 (flicker), 0.88
+    (random walk), as in :func:`sigmatau.noiseid.fit_power_law`, decaying as
+    ``ρ₁^(Δ^1.5)`` with the distance Δ in octaves (Monte Carlo; see
+    ``_correlation``), scaled by χ²/dof when above 1. Term selection is
+    backward: terms at zero are dropped, then the least significant
+    (``|c|/σ_c``) while below ``min_significance`` or while no degree of
+    freedom is left — except a term whose removal would put χ² beyond that
+    10⁻⁴ tail and double it: the curve needs it. Two terms that share a region
+    (K and R at the end of the record) are each weak given the other, and one
+    of them may be dropped although the curve supports both (a
+    likelihood-ratio rule, Δχ² > ``min_significance²``, kept both in 22 of 30
+    such records but a spurious B in 1 of 50 EuRoC accelerometer records, so
+    it is not used); the intervals below do not depend on that choice. *Intervals* come from a second,
+    unconstrained fit of every term (coefficients of either sign, same weights
+    and sandwich covariance, not scaled): free of selection and of the
+    non-negativity bound, its ``ĉ`` is unbiased and its ``σ_c`` holds for
+    terms that share a region, where the selected model's covariance is too
+    small (a kept K absorbed a dropped R and covered in 23–53 % of runs). A
+    kept term's interval on ``c = P²`` is ``[max(ĉ − zσ_c, 0), ĉ + zσ_c]``
+    (z for the two-sided level), widened to include the selected model's
+    value; a dropped term's upper bound is the larger of ``√(max(ĉ, 0) +
+    zσ_c)`` and ``√(c + zσ_c)`` of a refit of the selected terms with it forced
+    in (one-sided at ``(1 + p)/2``).
+
+    *Comparison.* Read-off and fit intervals that do not overlap, or a term
+    resolved by one method above the other's bound, are flagged; so are
+    unresolved terms, quantisation and other data problems, the filter term
+    and a discrepancy floor. :class:`ImuWarning` is issued for disagreements,
+    model discrepancy and an unresolved N or K (Q, B and R are unresolved in
+    most records; their flags are enough).
+
+    References
+    ----------
+    IEEE Std 952-1997 Annex C and IEEE Std 1554-2005 (Allan-variance noise
+    terms); ST DT0064 ("Gyroscope noise"); N. El-Sheimy, H. Hou, X. Niu, IEEE
+    Trans. Instrum. Meas. 57(1) (2008) 140–149; numerics.md §2, §3, §6.
+
+    Examples
+    --------
+    >>> from sigmatau.imu import simulate, analyze
+    >>> y = simulate("euroc-gyro", duration=1800.0, rng=4)
+    >>> model = analyze(y, rate=200.0, unit="rad/s")
+    >>> round(model.N.value / 1.6968e-4, 2), model.N.resolved
+    (1.0, True)
+    >>> model.B.resolved, model.Q.resolved
+    (False, False)
+    """
+    su, conf, terms = _check_options(unit, confidence, terms, min_significance)
+    if isinstance(samples, StabilityResult):
+        result = samples
+        rate_f, n_samples = _check_result(result, rate)
+        data_checks: Optional[DataChecks] = None
+        flags: list[Flag] = []
+    else:
+        result, rate_f, n_samples, data_checks, flags = _curve_of_samples(
+            samples, rate=rate, unit=unit, scale=scale, increments=increments, taus=taus, conf=conf,
+            checks=checks, lsb=lsb, odr=odr, full_scale=full_scale)
+    if len(result) < 3:
+        raise DataError(f"the curve has {len(result)} τ; the model needs at least 3 (a longer record)")
+    _check_deviation_range(np.asarray(result.dev, float))
+    t_s, d_s, nu_s = _usable_points(result, rate_f, terms, min_significance)
+
+    fit = _fit_model(t_s, d_s**2, nu_s, rate_f, terms, min_significance)
+    readoff, regions = _readoffs(t_s, d_s, nu_s, conf, su, terms, rate_f, fit.full_coef, fit.full_gain,
+                                 fit.var_cov)
+    fitted = _fit_parameters(fit, conf, su, terms, t_s)
+    primary = _primary(fitted, su, conf)
+    flags += _compare(readoff, fitted, regions, t_s)
+    flags += _model_flags(fit, data_checks, primary, su)
+    _warn_flags(flags)
+    return NoiseModel(
+        kind=su.kind, unit=su.name, rate=rate_f, n_samples=n_samples, confidence=conf,
+        readoff=readoff, fit=fitted, regions=regions, fit_terms=fit.kept, fit_chi2=fit.chi2, fit_dof=fit.dof,
+        discrepancy=fit.eps, filter_time=fit.filter_time,
+        flags=tuple(flags), checks=data_checks, result=result, _coef=fit.coef, _cov=fit.cov,
+        **primary,
+    )
+
+
+def _check_options(unit: str, confidence: float, terms: Sequence[str], min_significance: float
+                   ) -> tuple[SensorUnit, float, tuple[str, ...]]:
+    """The sensor unit, the confidence as a float and the terms as a tuple, each checked."""
+    su = sensor_unit(unit)
+    conf = float(confidence)
+    if not 0.0 < conf < 1.0:
+        raise ParameterError(f"confidence={confidence!r} must be in (0, 1)")
+    terms = tuple(terms)
+    if not terms or any(t not in TERMS for t in terms) or len(set(terms)) != len(terms):
+        raise ParameterError(f"terms={terms!r} must be distinct names among {TERMS}")
+    if isinstance(min_significance, bool) or not float(min_significance) >= 0:
+        raise ParameterError(f"min_significance={min_significance!r} must be a non-negative number")
+    return su, conf, terms
+
+
+def _check_result(result: StabilityResult, rate: Optional[float]) -> tuple[float, int]:
+    """Rate and number of samples of a given OADEV/ADEV curve of rate samples (checked)."""
+    if result.statistic not in ("oadev", "adev"):
+        raise ParameterError(f"the result must be an OADEV or ADEV curve, got {result.statistic!r}")
+    if result.data_type != "freq":
+        raise ParameterError("the result must come from rate (frequency-type) samples, data_type='freq'")
+    if rate is not None and abs(check_rate(rate) - result.rate) > 1e-9 * result.rate:
+        raise ParameterError(f"rate={rate!r} differs from the result's rate {result.rate:g} Hz")
+    return float(result.rate), int(result.n_points - 1)
+
+
+def _curve_of_samples(samples: Any, *, rate: Optional[float], unit: str, scale: float, increments: bool,
+                      taus: Any, conf: float, checks: bool, lsb: Optional[float], odr: Optional[float],
+                      full_scale: Optional[float]
+                      ) -> tuple[StabilityResult, float, int, Optional[DataChecks], list[Flag]]:
+    """OADEV curve of raw samples (scaled, increments turned into rates), after the data checks.
+
+    Returns
+    -------
+    result, rate, n_samples, data_checks, flags
+        The curve (χ² intervals), the rate, the number of samples, the data
+        checks (None when ``checks`` is false) and the flags they raise.
+    """
+    if rate is None:
+        raise ParameterError("rate (Hz) is required with raw samples")
+    rate_f = check_rate(rate)
+    if isinstance(scale, bool):
+        raise ParameterError(f"scale={scale!r} must be a positive number")
+    sc = float(scale)
+    if not (math.isfinite(sc) and sc > 0):
+        raise ParameterError(f"scale={scale!r} must be a positive number")
+    y = as_series(samples, "samples") * sc
+    if increments:
+        y = y * rate_f
+    n_samples = int(y.size)
+    if n_samples < 16:
+        raise DataError(f"an IMU noise model needs at least 16 samples, got {n_samples}")
+    data_checks: Optional[DataChecks] = None
+    flags: list[Flag] = []
+    if checks:
+        # warn=False and re-issued here (not catch_warnings): the warning filters are
+        # process-wide, and channels are analysed in threads (analysis.analyze_log).
+        data_checks = check_samples(y, rate=rate_f, unit=unit, lsb=None if lsb is None else lsb,
+                                    odr=odr, full_scale=full_scale, warn=False)
+        for cls_name, msg in data_checks.warned:
+            # stacklevel 3: the caller of analyze(), as before this step was split out
+            warnings.warn(msg, getattr(checks_module, cls_name), stacklevel=3)
+        for cls, msg in data_checks.warned:
+            quantized = cls == "QuantizationWarning"
+            flags.append(Flag("quantized" if quantized else "data", "N" if quantized else "", msg))
+    if np.ptp(y) == 0:
+        raise DataError("all samples are equal: no noise to analyse")
+    result = oadev(y, rate=rate_f, taus=taus, confidence=conf, ci="chi2")
+    return result, rate_f, n_samples, data_checks, flags
+
+
+def _usable_points(result: StabilityResult, rate_f: float, terms: Sequence[str], min_significance: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """τ, deviation and EDF of the points the model is extracted from (σ > 0, EDF > 0).
+
+    The EDF is that under the noise type a first fit finds dominant at each τ.
+    It fills the τ without an identified type, and where the identification
+    says otherwise the smaller EDF is kept: at the longest τ, with a handful of
+    averages, the identification is unreliable and an overstated EDF would
+    make the few points there look more precise than they are.
+    """
+    taus_a = np.asarray(result.taus, float)
+    dev = np.asarray(result.dev, float)
+    good = dev > 0
+    if result.edf is not None:
+        nu = np.asarray(result.edf, float).copy()
+    else:
+        nu = np.full(taus_a.size, np.nan)
+    missing = ~(np.isfinite(nu) & (nu > 0))
+    first = np.where(missing, np.maximum(result.n_points / np.maximum(result.m, 1) - 1.0, 1.0), nu)
+    pre = _fit_model(taus_a[good], dev[good] ** 2, first[good], rate_f, terms, min_significance)
+    alpha = np.zeros(taus_a.size)
+    alpha[good] = pre.dominant
+    nu_model = _model_edf(result, alpha)
+    ok_model = np.isfinite(nu_model) & (nu_model > 0)
+    nu = np.where(missing, nu_model, np.where(ok_model, np.minimum(nu, nu_model), nu))
+    nu = np.where(np.isfinite(nu) & (nu > 0), nu, first)
+    sel = good & np.isfinite(nu) & (nu > 0)
+    return taus_a[sel], dev[sel], nu[sel]
+
+
+def _primary(fitted: Mapping[str, Parameter], su: SensorUnit, conf: float) -> dict[str, Parameter]:
+    """The five parameters of the model: the fit's, or an "excluded" placeholder for a term left out."""
+    primary = {}
+    for t in TERMS:
+        if t in fitted:
+            primary[t] = fitted[t]
+        else:
+            primary[t] = Parameter(t, math.nan, 0.0, math.inf, su.term_unit(t), False, "excluded", conf, su.kind,
+                                   note="excluded by terms=")
+    return primary
+
+
+def _model_flags(fit: _Fit, data_checks: Optional[DataChecks], primary: Mapping[str, Parameter],
+                 su: SensorUnit) -> list[Flag]:
+    """Flags of the fit itself: a discrepancy floor, a low-pass filter term, and a quantiser
+    floor that holds more than a tenth of N²."""
+    flags = []
+    if fit.eps > 0:
+        flags.append(Flag("model", "", (
+            f"the curve departs from the five-term model beyond its statistical scatter (χ²/dof"
+            f" {fit.raw_chi2_dof:.3g}): a Gauss–Markov hump, a sinusoid, filtering, temperature drift or"
+            f" non-stationarity? A discrepancy of {100 * fit.eps:.2g} % per τ was added to the uncertainty of"
+            " every point, which widens the intervals")))
+    if fit.filter_time > 0:
+        flags.append(Flag("data", "Q", (
+            f"the shortest τ lie below the white-noise line, AVAR ≈ N²/τ·(1 − τ_f/τ) with τ_f ="
+            f" {fit.filter_time:.3g} s: the sensor's low-pass (anti-alias) filter; quantisation Q cannot be"
+            " measured under it")))
+    if data_checks is not None and data_checks.quantization_density is not None and primary["N"].resolved:
+        qd = data_checks.quantization_density
+        share = (qd / primary["N"].value) ** 2
+        if share > 0.1:
+            flags.append(Flag("quantized", "N", (
+                f"the quantiser's white floor LSB/√(12f) = {qd:.3g} {pretty(su.term_unit('N'))} is"
+                f" {100 * share:.2g} % of N² (N without it:"
+                f" {math.sqrt(max(primary['N'].value ** 2 - qd ** 2, 0)):.3g})")))
+    return flags
+
+
+def _warn_flags(flags: Sequence[Flag]) -> None:
+    """Issue :class:`ImuWarning` for the flags a user must not miss (stacklevel: the caller of analyze)."""
+    for f in flags:
+        # Q, B and R are unresolved in most records: the flag is enough. N and K
+        # feed navigation filters, so their absence is warned about.
+        if f.code in ("disagreement", "model") or (f.code == "not-resolved" and f.term in ("N", "K")):
+            warnings.warn(f.message, ImuWarning, stacklevel=3)
+
+
+def _compare(readoff: Mapping[str, Parameter], fit: Mapping[str, Parameter], regions: Mapping[str, Region],
+             taus: np.ndarray) -> list[Flag]:
+    flags = []
+    for t in TERMS:
+        if t not in fit:
+            continue
+        ro, ft = readoff[t], fit[t]
+        if not ft.resolved and not ro.resolved:
+            if t in ("K", "R", "B", "Q"):
+                flags.append(Flag("not-resolved", t, (
+                    f"{t} ({_NAMES[t]}) is not resolved by the record (τ {taus[0]:.3g}–{taus[-1]:.3g} s):"
+                    f" {t} < {min(ro.high, ft.high):.3g} {pretty(ft.unit)}")))
+            else:
+                flags.append(Flag("not-resolved", t, f"{t} ({_NAMES[t]}) is not resolved by the record"))
+        elif ro.resolved and ft.resolved:
+            if ro.high < ft.low or ft.high < ro.low:
+                flags.append(Flag("disagreement", t, (
+                    f"{t}: read-off {ro.format(3)} and fit {ft.format(3)} disagree beyond their intervals"
+                    f" (read-off region {regions[t].tau_low:.3g}–{regions[t].tau_high:.3g} s)")))
+        elif ro.resolved and not ft.resolved:
+            if ro.low > ft.high:
+                flags.append(Flag("disagreement", t, (
+                    f"{t}: the read-off finds {ro.format(3)} but the fit drops the term (bound {ft.high:.3g})")))
+        else:
+            if ft.low > ro.high:
+                flags.append(Flag("disagreement", t, (
+                    f"{t}: the fit finds {ft.format(3)} above the read-off bound {ro.high:.3g}")))
+    return flags
+
+
+def _model_edf(result: StabilityResult, fit_alpha: np.ndarray) -> np.ndarray:
+    """EDF of each point of ``result`` under the power-law noise α (clipped to −2…2) found at it."""
+    alpha = np.clip(fit_alpha, -2, 2).astype(np.int64)
+    return np.asarray(edf_array(result.statistic, alpha, result.m, result.n_points, unsupported="nan"), float)
+
+
+def _check_deviation_range(dev: np.ndarray) -> None:
+    """Refuse, in one line, a curve whose scale the fit cannot carry (it gave zero-width intervals
+    at 1e100 and a LinAlgError at 1e-100 in the sample unit)."""
+    pos = dev[np.isfinite(dev) & (dev > 0)]
+    lo, hi = DEVIATION_RANGE
+    if pos.size and (pos.min() < lo or pos.max() > hi):
+        raise DataError(
+            f"the Allan deviation spans {pos.min():.3g} … {pos.max():.3g} in the sample unit; the IMU model "
+            f"is fitted for deviations within {lo:g} … {hi:g}: give the samples in a unit that brings them "
+            "into that range (scale= in Python, --gyro-unit/--accel-unit on the command line)")

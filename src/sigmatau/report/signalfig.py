@@ -1,0 +1,286 @@
+"""The signal figure of one channel: time series, Welch PSD with the model's spectra, lag plot.
+
+Public through :mod:`sigmatau.report.plots` (:func:`signal_figure`).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Optional
+
+import numpy as np
+
+from ..core.validate import check_rate
+from ..errors import DataError, ParameterError
+from .figbase import (_FS, _FS_LABEL, _FS_TITLE, _GRID, _TERMS, STATISTIC_COLORS, TERM_COLORS, _freeze_layout,
+                      _pretty, _style_log_axes, new_figure)
+from .figmodel import _unit_factor
+
+if TYPE_CHECKING:  # pragma: no cover
+    from matplotlib.figure import Figure
+
+    from ..imu.model import NoiseModel
+
+def _time_scale(duration: float) -> tuple[float, str]:
+    """Divisor and unit of the time axis: hours, minutes or seconds."""
+    if duration >= 2 * 3600:
+        return 3600.0, "h"
+    if duration >= 120:
+        return 60.0, "min"
+    return 1.0, "s"
+
+
+def _welch(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray, int]:
+    """One-sided Welch PSD (Hann, 50 % overlap), computed in chunks to bound memory."""
+    from scipy.signal import welch
+
+    n = x.size
+    # Segments of n/16 (≈ 30 averaged with the overlap: ±25 % at the lowest frequencies),
+    # a power of two between 16 and 2^18; the log-frequency binning below smooths the rest.
+    nperseg = n if n < 32 else int(2 ** min(18, max(4, math.floor(math.log2(n / 16)))))
+    step = max(1, nperseg // 2)
+    nseg = (n - nperseg) // step + 1
+    per_chunk = max(1, (1 << 22) // nperseg)
+    acc: Optional[np.ndarray] = None
+    freqs = None
+    for s in range(0, nseg, per_chunk):
+        k = min(per_chunk, nseg - s)
+        seg = x[s * step: s * step + (k - 1) * step + nperseg]
+        freqs, pxx = welch(seg, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg - step,
+                           detrend="constant", scaling="density", return_onesided=True)
+        acc = pxx * k if acc is None else acc + pxx * k
+    assert acc is not None and freqs is not None
+    return freqs, acc / nseg, nperseg
+
+
+def _log_bin(f: np.ndarray, p: np.ndarray, per_decade: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """Average the PSD in logarithmic frequency bins (keeps every low-frequency point)."""
+    keep = (f > 0) & np.isfinite(p)
+    f, p = f[keep], p[keep]
+    if f.size < 2:
+        return f, p
+    lf = np.log10(f)
+    idx = np.floor((lf - lf[0]) * per_decade + 1e-9).astype(np.int64)
+    counts = np.bincount(idx)
+    used = counts > 0
+    fb = np.bincount(idx, weights=lf)[used] / counts[used]
+    pb = np.bincount(idx, weights=p)[used] / counts[used]
+    return 10 ** fb, pb
+
+
+def _psd_unit(unit: str) -> str:
+    """Unit of the PSD axis: ``unit²/Hz``."""
+    u = _pretty(unit)
+    if not u:
+        return "1/Hz"
+    return (f"({u})" if any(c in u for c in "/·* ") else u) + "²/Hz"
+
+
+def _model_psd(model: "NoiseModel", f: np.ndarray, factor: float) -> dict[str, np.ndarray]:
+    """One-sided PSD of each resolved term (IEEE 952 Annex C two-sided forms × 2)."""
+    out: dict[str, np.ndarray] = {}
+    tau0 = 1.0 / model.rate
+    w = 2.0 * math.pi * f
+    for term in _TERMS:
+        par = getattr(model, term)
+        if not par.resolved or not par.value > 0:
+            continue
+        c = par.value * factor
+        out[term] = {
+            "Q": 2.0 * tau0 * (w * c) ** 2,
+            "N": np.full(f.shape, 2.0 * c * c),
+            "B": c * c / (math.pi * f),
+            "K": 2.0 * (c / w) ** 2,
+            "R": 2.0 * c * c / w**3,
+        }[term]
+    return out
+
+
+def signal_figure(
+    samples: Any,
+    *,
+    rate: float,
+    name: str,
+    unit: str,
+    model: Optional["NoiseModel"] = None,
+    max_points: int = 20000,
+) -> "Figure":
+    """The design tip's Figure 2 for one channel: time series, PSD and lag plot.
+
+    Parameters
+    ----------
+    samples : array_like
+        1-D samples (NaN are ignored).
+    rate : float
+        Sample rate in Hz.
+    name : str
+        Channel name (titles).
+    unit : str
+        Unit of the samples (axis labels).
+    model : NoiseModel, optional
+        When given, the PSD shows each resolved term's spectrum and their sum.
+    max_points : int
+        Largest number of points drawn in the lag plot (subsampled evenly).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Notes
+    -----
+    (a) Time series; long records are drawn as the min/max envelope and the
+    mean of ≈1500 display bins. (b) One-sided Welch PSD (Hann window, 50 %
+    overlap, segments of about N/16 samples as a power of two ≤ 2¹⁸, so the
+    lowest frequencies average ≈30 segments), averaged in 1/40-decade
+    frequency bins. The model overlay uses the IEEE 952 spectra doubled to one
+    side: white ``2N²``, flicker ``B²/(πf)``, random walk ``K²/(2π²f²)``,
+    quantisation ``2τ0(2πf)²Q²``, ramp ``2R²/(2πf)³`` — so a channel with
+    ADEV σ(1 s) = N shows the level 2N². (c) Lag plot ``x[k+1]`` against
+    ``x[k]`` with the lag-1 correlation coefficient of the whole record.
+    """
+    rate = check_rate(rate)
+    if not isinstance(name, str) or not isinstance(unit, str):
+        raise ParameterError(f"name={name!r} and unit={unit!r} must be strings")
+    if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 100:
+        raise ParameterError(f"max_points={max_points!r} must be an integer ≥ 100")
+    x, t_all = _finite_samples(samples, rate, name)
+
+    fig = new_figure((12.6, 3.9))
+    gs = fig.add_gridspec(1, 3, width_ratios=[1.55, 1.25, 1.0])
+    ax_t, ax_f, ax_l = (fig.add_subplot(gs[0, j]) for j in range(3))
+    ulabel = _pretty(unit)
+    ustr = f" [{ulabel}]" if ulabel else ""
+    color = STATISTIC_COLORS["oadev"]
+    _draw_series(ax_t, x, t_all, rate, f"{name}{ustr}", color)
+    _draw_psd(ax_f, x, rate, unit, model, color)
+    _draw_lag(ax_l, x, max_points, ustr, color)
+    fig.suptitle(f"{name}: time series, spectrum and lag plot", fontsize=_FS_TITLE + 1)
+    _freeze_layout(fig)
+    return fig
+
+
+def _finite_samples(samples: Any, rate: float, name: str) -> tuple[np.ndarray, Optional[np.ndarray]]:
+    """The finite samples, and their times in seconds when NaN were dropped (else None).
+
+    Raises
+    ------
+    DataError
+        Non-numeric or non-1-D samples, or fewer than 4 finite values.
+    """
+    try:
+        x = np.asarray(samples, dtype=float)
+    except (TypeError, ValueError):
+        raise DataError(f"samples of {name!r} must be numeric") from None
+    if x.ndim != 1:
+        raise DataError(f"samples of {name!r} must be 1-D, got shape {x.shape}")
+    finite = np.isfinite(x)
+    if int(finite.sum()) < 4:
+        raise DataError(f"samples of {name!r}: {int(finite.sum())} finite values, at least 4 are needed")
+    t_all = None
+    if not finite.all():
+        t_all = np.flatnonzero(finite) / rate
+        x = x[finite]
+    return x, t_all
+
+
+def _draw_series(ax_t: Any, x: np.ndarray, t_all: Optional[np.ndarray], rate: float, ylabel: str,
+                 color: str) -> None:
+    """Panel (a): the samples, or for long records the min/max envelope and mean of ≈1500 bins."""
+    n = x.size
+    duration = n / rate if t_all is None else float(t_all[-1] - t_all[0]) + 1.0 / rate
+    scale, tu = _time_scale(duration)
+    nb = 1500
+    if n <= 2 * nb:
+        t = (np.arange(n) / rate if t_all is None else t_all) / scale
+        ax_t.plot(t, x, color=color, linewidth=0.7, gid="series")
+    else:
+        edges = np.linspace(0, n, nb + 1).astype(np.int64)
+        lo = np.minimum.reduceat(x, edges[:-1])
+        hi = np.maximum.reduceat(x, edges[:-1])
+        mean = np.add.reduceat(x, edges[:-1]) / np.diff(edges)
+        tpos = (edges[:-1] + edges[1:]) / 2.0
+        t = (tpos / rate if t_all is None else np.interp(tpos, np.arange(n), t_all)) / scale
+        binw = n / nb / rate
+        env = ax_t.fill_between(t, lo, hi, color=color, alpha=0.3, linewidth=0, label=f"min–max per {binw:.3g} s")
+        env.set_gid("envelope")
+        ax_t.plot(t, mean, color=color, linewidth=0.8, label=f"mean per {binw:.3g} s", gid="series")
+        ax_t.legend(loc="best", fontsize=_FS - 1, frameon=True, framealpha=0.9, edgecolor="none")
+    ax_t.set_xlabel(f"time [{tu}]", fontsize=_FS_LABEL)
+    ax_t.set_ylabel(ylabel, fontsize=_FS_LABEL)
+    ax_t.set_title(f"(a) time series: {n:,} samples at {rate:g} Hz", fontsize=_FS_TITLE)
+    ax_t.margins(x=0.0)
+    ax_t.grid(True, **_GRID)
+    ax_t.tick_params(labelsize=_FS)
+
+
+def _draw_psd(ax_f: Any, x: np.ndarray, rate: float, unit: str, model: Optional["NoiseModel"], color: str) -> None:
+    """Panel (b): the log-binned Welch PSD, with the model's term spectra when there is a model."""
+    _style_log_axes(ax_f)
+    if x.size >= 16 and np.ptp(x) > 0:
+        freqs, pxx, nperseg = _welch(x, rate)
+        fb, pb = _log_bin(freqs, pxx)
+        pos = pb > 0
+        ax_f.plot(fb[pos], pb[pos], color=color, linewidth=1.0, gid="psd",
+                  label=f"Welch, {nperseg:,}-point Hann")
+        if model is not None and fb.size:
+            f_m = np.geomspace(fb[pos].min() if pos.any() else fb[0], rate / 2.0, 200)
+            _draw_model_psd(ax_f, model, unit, f_m)
+            if pos.any():
+                ax_f.set_ylim(pb[pos].min() / 3.0, pb[pos].max() * 3.0)
+            ax_f.set_xlim(fb[0] / 1.2, rate / 2.0 * 1.2)
+        ax_f.legend(loc="best", fontsize=_FS - 1, frameon=True, framealpha=0.9, edgecolor="none")
+    else:
+        ax_f.text(0.5, 0.5, "no PSD: record too short or constant", transform=ax_f.transAxes,
+                  ha="center", va="center", fontsize=_FS, color="0.3")
+    ax_f.set_xlabel("frequency [Hz]", fontsize=_FS_LABEL)
+    ax_f.set_ylabel(f"PSD [{_psd_unit(unit)}]", fontsize=_FS_LABEL)
+    ax_f.set_title("(b) power spectral density (one-sided)", fontsize=_FS_TITLE)
+
+
+def _draw_model_psd(ax_f: Any, model: "NoiseModel", unit: str, f_m: np.ndarray) -> None:
+    """Each resolved term's spectrum on ``f_m`` and their sum; nothing when the units do not convert."""
+    try:
+        factor = _unit_factor(model, unit)
+    except ParameterError:
+        factor = math.nan
+    if not math.isfinite(factor):
+        return
+    terms = _model_psd(model, f_m, factor)
+    for term, s in terms.items():
+        ax_f.plot(f_m, s, color=TERM_COLORS[term], linestyle=(0, (3, 1.5)), linewidth=1.2,
+                  label={"Q": "quantization Q", "N": "white 2N²", "B": "flicker B²/(πf)",
+                         "K": "random walk K²/(2π²f²)", "R": "ramp R"}[term], gid=f"psd-{term}")
+    if len(terms) > 1:
+        ax_f.plot(f_m, sum(terms.values()), color="black", linestyle=(0, (6, 2)), linewidth=1.0,
+                  label="model sum", gid="psd-model")
+
+
+def _draw_lag(ax_l: Any, x: np.ndarray, max_points: int, ustr: str, color: str) -> None:
+    """Panel (c): ``x[k+1]`` against ``x[k]`` (at most ``max_points``) and the lag-1 correlation r₁."""
+    from matplotlib.ticker import MaxNLocator
+
+    n = x.size
+    a, b = x[:-1], x[1:]
+    am, bm = a - a.mean(), b - b.mean()
+    den = math.sqrt(float(am @ am) * float(bm @ bm))
+    r = float(am @ bm) / den if den > 0 else math.nan
+    idx = np.unique(np.linspace(0, n - 2, min(max_points, n - 1)).astype(np.int64))
+    ax_l.scatter(a[idx], b[idx], s=2.0, color=color, alpha=0.35 if idx.size > 2000 else 0.7, linewidths=0,
+                 rasterized=True, gid="lag")
+    lo_, hi_ = float(min(a[idx].min(), b[idx].min())), float(max(a[idx].max(), b[idx].max()))
+    pad = (hi_ - lo_) * 0.05 or max(abs(lo_), 1.0) * 0.05
+    ax_l.plot([lo_ - pad, hi_ + pad], [lo_ - pad, hi_ + pad], color="0.6", linewidth=0.6, linestyle="--", zorder=0)
+    ax_l.set_xlim(lo_ - pad, hi_ + pad)
+    ax_l.set_ylim(lo_ - pad, hi_ + pad)
+    ax_l.set_aspect("equal", adjustable="box")
+    ax_l.xaxis.set_major_locator(MaxNLocator(nbins=5))
+    ax_l.yaxis.set_major_locator(MaxNLocator(nbins=5))
+    ax_l.grid(True, **_GRID)
+    ax_l.tick_params(labelsize=_FS)
+    ax_l.set_xlabel(f"x[k]{ustr}", fontsize=_FS_LABEL)
+    ax_l.set_ylabel(f"x[k+1]{ustr}", fontsize=_FS_LABEL)
+    rtext = "n/a" if not math.isfinite(r) else f"{r:.3f}"
+    ax_l.set_title(f"(c) lag plot, r₁ = {rtext}", fontsize=_FS_TITLE)
+    if idx.size < n - 1:
+        ax_l.text(0.98, 0.02, f"{idx.size:,} of {n - 1:,} pairs", transform=ax_l.transAxes, ha="right",
+                  va="bottom", fontsize=_FS - 1.5, color="0.35")

@@ -1,0 +1,219 @@
+"""Noise identification of a chunked record, streamed: lag-1 autocorrelation, B1 and R(n).
+
+Follows the decision rules of :func:`sigmatau.noiseid.identify` (in
+:mod:`sigmatau.uncertainty.noiseid`) on the decimated or averaged series,
+streamed twice per factor; :func:`_attach` hands the identified noise to
+:func:`sigmatau.uncertainty.attach.attach`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Callable, Iterator, Optional
+
+import numpy as np
+
+from ...core.result import StabilityResult
+from ...core.taus import long_factors_expected
+from ...errors import DataError
+from ...uncertainty.attach import attach
+from ...uncertainty.confidence import EDF_STATISTICS
+from .streams import _block_means, _Diff, _Raw, _Series, _strided, _with_history
+
+
+def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: int) -> tuple[list[float], list[float]]:
+    """Lag-1 sums of the d-th differences of a streamed series, d = 0 … dmax.
+
+    Returns ``(den_d, num_d)`` with ``den = Σ (z - z̄)²`` and
+    ``num = Σ (z_k - z̄)(z_{k+1} - z̄)`` (z̄ the mean of that difference series),
+    from two passes: means first, then the centred sums.
+    """
+    def new_values(ext: np.ndarray, had: int, d: int) -> np.ndarray:
+        diff = np.diff(ext, d) if d else ext
+        return diff[max(0, had - d) :]
+
+    sums: list[list[float]] = [[] for _ in range(dmax + 1)]
+    had = 0
+    for ext in _with_history(batches(), dmax):
+        for d in range(dmax + 1):
+            sums[d].append(float(np.add.reduce(new_values(ext, had, d))))
+        had = min(dmax, ext.size)
+    means = [math.fsum(sums[d]) / (n - d) for d in range(dmax + 1)]
+    den: list[list[float]] = [[] for _ in range(dmax + 1)]
+    num: list[list[float]] = [[] for _ in range(dmax + 1)]
+    last: list[Optional[float]] = [None] * (dmax + 1)
+    had = 0
+    for ext in _with_history(batches(), dmax):
+        for d in range(dmax + 1):
+            zc = new_values(ext, had, d) - means[d]
+            if zc.size == 0:
+                continue
+            den[d].append(float(np.einsum("i,i->", zc, zc)))
+            num[d].append(float(np.einsum("i,i->", zc[:-1], zc[1:])))
+            if last[d] is not None:
+                num[d].append(last[d] * float(zc[0]))
+            last[d] = float(zc[-1])
+        had = min(dmax, ext.size)
+    return [math.fsum(v) for v in den], [math.fsum(v) for v in num]
+
+
+def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int):
+    """α and α̂ by :func:`sigmatau.noiseid.lag1_acf_noise_id` on the decimated or averaged series."""
+    from ...uncertainty import noiseid
+
+    nz = len(range(0, raw.n, m)) if dtype == "phase" else raw.n // m
+
+    def batches() -> Iterator[np.ndarray]:
+        return _strided(raw, m, nz, L) if dtype == "phase" else _block_means(raw, m, nz, L)
+
+    if nz < noiseid.LAG1_MIN_POINTS:
+        raise noiseid.InsufficientDataError(f"lag-1 noise identification needs at least 30 points at m={m}, got {nz}")
+    if nz <= L:  # small enough: the in-memory routine itself
+        z = np.concatenate(list(batches()))
+        r = noiseid.lag1_acf_noise_id(z, 1, data_type=dtype, dmax=dmax)
+        return r.alpha, r.alpha_estimate
+    den, num = _lag1_streamed(batches, nz, dmax)
+    theta = 1 if dtype == "phase" else 0
+    d = 0
+    while True:
+        if den[d] == 0.0:
+            raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
+        r1 = num[d] / den[d]
+        if r1 <= -1.0:
+            raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
+        delta = r1 / (1.0 + r1)
+        if delta < 0.25 or d >= dmax:
+            break
+        d += 1
+    return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
+
+
+def _b1(freq: object, m: int, hadamard: bool, L: int, n_expected: Optional[int] = None):
+    """:func:`sigmatau.noiseid.b1_noise_id` from streamed block means of the frequency series."""
+    from ...uncertainty.noiseid import InsufficientDataError, b1_classify, b1_observed
+
+    def obs(series: object) -> tuple[float, int]:
+        count = series.n // m  # type: ignore[attr-defined]
+        means = np.concatenate([np.empty(0)] + list(_block_means(series, m, count, L)))
+        if means.size < 2:
+            raise InsufficientDataError(f"the B1 ratio needs at least 2 averages at m={m}, got {means.size}")
+        return b1_observed(means, 1)
+
+    ratio, nb = obs(freq)
+    if nb < 3:
+        raise InsufficientDataError(f"B1 noise identification needs at least 3 averages at m={m}, got {nb}")
+    mu, mu_hat = b1_classify(ratio, nb, n_expected)
+    if hadamard and mu >= 1:
+        try:
+            ratio2, nb2 = obs(_Diff(freq))
+        except DataError:
+            nb2 = 0
+        if nb2 >= 3:
+            mu2, mu2_hat = b1_classify(ratio2, nb2, n_expected)
+            mu = min(max(mu2 + 2, 1), 3)
+            mu_hat = min(max(mu2_hat + 2.0, 1.0), 3.0)
+    alpha = 1 if mu == -2 else -mu - 1
+    return alpha, -mu_hat - 1.0, mu == -2
+
+
+def _rn(src: _Series, m: int, dtype: str) -> float:
+    """R(n) = MVAR/OAVAR at factor m, computed streamed on ``src``."""
+    from ...stats.allan import MVAR, OAVAR
+    from ...uncertainty.noiseid import InsufficientDataError
+
+    npts = src.n if dtype == "phase" else src.n + 1
+    if npts < 3 * m:
+        raise InsufficientDataError(f"R(n) needs at least {3 * m} phase points at m={m}, got {npts}")
+    with long_factors_expected():  # long-τ factors are the point here
+        # Through the series' StreamedSeries protocol, i.e. sources._run(stat, src, …): that module
+        # imports this one, so it is not imported back.
+        mv = src.__sigmatau_statistic__(MVAR, rate=1.0, data_type=dtype, taus="octave", m=[m], ci=None).var[0]
+        av = src.__sigmatau_statistic__(OAVAR, rate=1.0, data_type=dtype, taus="octave", m=[m], ci=None).var[0]
+    if av == 0.0:
+        raise DataError(f"the Allan variance is zero at m={m}; R(n) is undefined")
+    return float(mv / av)
+
+
+def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
+              n_terms: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(alpha, alpha_estimate)`` per factor, following :func:`sigmatau.noiseid.identify`."""
+    from ...uncertainty import noiseid
+
+    fam = noiseid.FAMILY_ALIASES[family]
+    dmax, lo, hi = noiseid.FAMILY_RULES[fam]
+    raw = _Raw(src)
+    freq = _Diff(raw) if dtype == "phase" else raw
+    L = src.chunk_size
+    m_list = [int(v) for v in ms]
+    alpha = np.zeros(len(m_list), dtype=np.int64)
+    est = np.full(len(m_list), np.nan)
+    method: list[str] = []
+    n_freq = src.n - 1 if dtype == "phase" else src.n
+    min_averages = noiseid.b1_min_averages(family)
+    for i, m in enumerate(m_list):
+        if src.n // m >= noiseid.LAG1_MIN_POINTS:
+            try:
+                alpha[i], est[i] = _lag1(raw, m, dtype, dmax, L)
+            except noiseid.InsufficientDataError:
+                pass
+            else:
+                method.append("lag1")
+                continue
+        if n_freq // m < min_averages:
+            method.append("carried")
+            continue
+        try:
+            a, e, ambiguous = _b1(freq, m, fam == "hadamard", L,
+                                  None if n_terms is None else int(n_terms[i]))
+        except DataError:
+            method.append("carried")
+            continue
+        alpha[i], est[i] = a, e
+        if ambiguous:
+            try:
+                rn = _rn(src, m, dtype)
+            except DataError:
+                pass
+            else:
+                wpm, fpm = float(noiseid.rn_expected(m, 2)), float(noiseid.rn_expected(m, 1))
+                alpha[i] = 2 if rn < math.sqrt(wpm * fpm) else 1
+                t = (math.log(rn) - math.log(wpm)) / (math.log(fpm) - math.log(wpm)) if fpm != wpm else 0.0
+                est[i] = 2.0 - t
+        method.append("done")
+    done = [i for i, tag in enumerate(method) if tag != "carried"]
+    for i, tag in enumerate(method):
+        if tag == "carried":
+            if not done:
+                raise noiseid.InsufficientDataError(
+                    f"no averaging factor in ms leaves enough data ({src.n} points) for any method"
+                )
+            below = [j for j in done if m_list[j] < m_list[i]]
+            if below:
+                source = max(below, key=lambda j: m_list[j])
+            else:
+                source = min(done, key=lambda j: (abs(math.log(m_list[j] / m_list[i])), -m_list[j]))
+            alpha[i] = alpha[source]
+    return np.clip(alpha, lo, hi).astype(float), est
+
+
+def _attach(result: StabilityResult, src: _Series, data_type: str, *, alpha: Optional[int],
+            confidence: float, ci: Optional[str], id_factors: Optional[np.ndarray] = None,
+            identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
+    """:func:`sigmatau.uncertainty.attach.attach` with the noise identified chunk-wise."""
+    if ci is None or len(result) == 0 or alpha is not None or identified is not None:
+        # The data are not looked at on these paths.
+        return attach(result, np.empty(0), data_type, alpha=alpha, confidence=confidence, ci=ci,
+                      id_factors=id_factors, identified=identified)
+    factors = result.m if id_factors is None else id_factors
+    try:
+        same = np.array_equal(factors, result.m)
+        ident = _identify(src, factors, data_type, result.statistic, n_terms=result.n if same else None)
+    except DataError as exc:
+        nan = np.full(len(result), np.nan)
+        out = attach(result, np.empty(0), data_type, alpha=None, confidence=confidence, ci=ci, identified=(nan, nan))
+        if ci == "chi2" and result.statistic in EDF_STATISTICS:
+            reason = f"noise type not identified ({exc}); give alpha= for an interval"
+            out = replace(out, ci_reason=(reason,) * len(result))
+        return out
+    return attach(result, np.empty(0), data_type, alpha=None, confidence=confidence, ci=ci, identified=ident)

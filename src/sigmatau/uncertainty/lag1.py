@@ -1,0 +1,209 @@
+"""Riley & Greenhall's lag-1 autocorrelation noise identification (numerics.md §5.2).
+
+Public through :mod:`sigmatau.uncertainty.noiseid` (and :mod:`sigmatau.noiseid`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from ..core.numeric import block_means, dot, sumsq
+from ..core.validate import as_series, check_data_type
+from ..errors import DataError, ParameterError
+from .noisebase import InsufficientDataError, _check_d, _check_m
+
+#: Fewest points the lag-1 method accepts (Riley & Greenhall; numerics.md §5.2).
+LAG1_MIN_POINTS = 30
+
+
+
+
+
+@dataclass(frozen=True)
+class Lag1Result:
+    """Outcome of the lag-1 autocorrelation method at one averaging factor.
+
+    Attributes
+    ----------
+    alpha : int
+        Rounded noise exponent ``−round(2δ) − 2d + 2θ`` (not clipped).
+    alpha_estimate : float
+        Fractional estimate ``−2(δ + d) + 2θ``; informative for mixed noise.
+    d : int
+        Number of differences taken before stopping.
+    rho1 : float
+        Lag-1 autocorrelation ``r1`` of the series at the final ``d``.
+    m : int
+        Averaging factor.
+    n : int
+        Length of the decimated (phase) or averaged (frequency) series.
+    """
+
+    alpha: int
+    alpha_estimate: float
+    d: int
+    rho1: float
+    m: int
+    n: int
+
+
+def _lag1_r1(z: np.ndarray, acf: str = "standard") -> float:
+    """Sample lag-1 autocorrelation of ``z`` (times ``(n−1)/n`` for ``acf="stable32"``)."""
+    zc = z - z.mean()
+    den = sumsq(zc)
+    if den == 0.0:
+        raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
+    r1 = dot(zc[:-1], zc[1:]) / den
+    return r1 * (z.size - 1) / z.size if acf == "stable32" else r1
+
+
+def _detrend(data: np.ndarray, data_type: str) -> np.ndarray:
+    """Remove a least-squares quadratic (phase) or line (frequency)."""
+    t = np.linspace(-1.0, 1.0, data.size)
+    deg = 2 if data_type == "phase" else 1
+    return data - np.polyval(np.polyfit(t, data, deg), t)
+
+
+def lag1_acf_noise_id(
+    data: object,
+    m: int = 1,
+    *,
+    data_type: Literal["freq", "phase"] = "freq",
+    dmin: int = 0,
+    dmax: int = 2,
+    detrend: bool = False,
+    acf: Literal["standard", "stable32"] = "standard",
+    min_points: int = LAG1_MIN_POINTS,
+) -> Lag1Result:
+    """Identify the power-law noise at averaging factor ``m`` from lag-1 autocorrelations.
+
+    Parameters
+    ----------
+    data : array_like
+        Phase or frequency samples.
+    m : int
+        Averaging factor. Phase data are decimated (``z_k = x_{km}``), frequency
+        data averaged over non-overlapped blocks of ``m``.
+    data_type : {"freq", "phase"}
+        Meaning of ``data``.
+    dmin, dmax : int
+        Fewest and most differences. ``dmax = 2`` resolves α = 2 … −2 (the
+        Allan, total and Theo families), ``dmax = 3`` reaches α = −4 on
+        frequency data (Hadamard family).
+    detrend : bool
+        Remove a least-squares quadratic from phase data or a line from
+        frequency data before decimating or averaging. Off by default, as in
+        Stable32, whose α column the default reproduces; the differencing
+        already removes trends whenever ``d ≥ 1``.
+    acf : {"standard", "stable32"}
+        ``"standard"``: the sample lag-1 autocorrelation below.
+        ``"stable32"``: the same multiplied by ``(n−1)/n``, n the current
+        length, as Stable32 does; it changes r1 by less than 3 % at n ≥ 30 and
+        matters only when α̂ lies within a few hundredths of a rounding
+        boundary, where it reproduces Stable32's α column.
+    min_points : int
+        Fewest points of the decimated/averaged series accepted (30).
+
+    Returns
+    -------
+    Lag1Result
+
+    Raises
+    ------
+    InsufficientDataError
+        When fewer than ``min_points`` points remain at ``m``; fall back to
+        :func:`b1_noise_id` (as :func:`identify` does).
+
+    Notes
+    -----
+    For a stationary discrete power-law series with spectral exponent
+    ``α_z`` the lag-1 autocorrelation is ``ρ1 = −α_z/(2 + α_z)``, so
+    ``δ = ρ1/(1 + ρ1) = −α_z/2``; each difference raises ``α_z`` by 2.
+    Starting from ``d = 0``, with the sample autocorrelation
+
+    .. math:: r_1 = \\frac{\\sum_{k=0}^{n-2}(z_k - \\bar z)(z_{k+1} - \\bar z)}
+                          {\\sum_{k=0}^{n-1}(z_k - \\bar z)^2},
+              \\qquad δ = \\frac{r_1}{1 + r_1},
+
+    the loop stops when ``d ≥ dmin`` and (``δ < 0.25`` or ``d ≥ dmax``);
+    otherwise ``z`` is differenced and ``d`` incremented. Then
+    ``α̂ = −2(δ + d) + 2θ`` and ``α = −round(2δ) − 2d + 2θ``, with θ = 1 for
+    phase data and 0 for frequency data.
+
+    At ``m > 1`` the decimated series are differences of τ-averages, whose lag-1
+    correlation shifts α̂ (FFM ≈ −1.45, RWFM ≈ −2.4, FWFM ≈ −3.9, which rounds
+    to RRFM); see numerics.md §5.2 and §8 item 3.
+
+    References
+    ----------
+    W. J. Riley and C. A. Greenhall, "Power law noise identification using the
+    lag 1 autocorrelation", Proc. 18th EFTF (2004); W. J. Riley, NIST SP 1065
+    (2008) §5.6; numerics.md §5.2.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sigmatau.noiseid import lag1_acf_noise_id
+    >>> y = np.random.default_rng(1).standard_normal(4096)      # white FM
+    >>> lag1_acf_noise_id(y, 4).alpha
+    0
+    """
+    dtype = check_data_type(data_type)
+    series = as_series(data)
+    m = _check_m(m)
+    dmin, dmax = _check_d(dmin, dmax)
+    if acf not in ("standard", "stable32"):
+        raise ParameterError(f"acf={acf!r} must be 'standard' or 'stable32'")
+    if min_points < 3:
+        raise ParameterError(f"min_points={min_points!r} must be at least 3")
+    z = _analysis_series(series, dtype, m, detrend, min_points)
+    theta = 1 if dtype == "phase" else 0
+    d, delta, r1 = _difference_until_white(z, m, dmin, dmax, acf)
+    alpha_est = -2.0 * (delta + d) + 2 * theta
+    alpha = -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta
+    return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(z.size))
+
+
+def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_points: int) -> np.ndarray:
+    """The series the method works on at ``m``: decimated phase or block-averaged frequency.
+
+    Raises
+    ------
+    InsufficientDataError
+        When fewer than ``min_points`` points remain.
+    """
+    if detrend and series.size > 3:
+        series = _detrend(series, dtype)
+    z = series[::m] if dtype == "phase" else block_means(series, m)
+    n = int(z.size)
+    if n < min_points:
+        raise InsufficientDataError(
+            f"lag-1 noise identification needs at least {min_points} points at m={m},"
+            f" got {n} from {series.size} {dtype} samples"
+        )
+    return z
+
+
+def _difference_until_white(z: np.ndarray, m: int, dmin: int, dmax: int, acf: str) -> tuple[int, float, float]:
+    """Difference ``z`` until δ = r1/(1 + r1) < 0.25 (within ``dmin``…``dmax``).
+
+    Returns
+    -------
+    d : int
+        Differences taken.
+    delta, r1 : float
+        δ and the lag-1 autocorrelation at that ``d``.
+    """
+    d = 0
+    while True:
+        r1 = _lag1_r1(z, acf)
+        if r1 <= -1.0:
+            raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
+        delta = r1 / (1.0 + r1)
+        if d >= dmin and (delta < 0.25 or d >= dmax):
+            return d, delta, r1
+        z = np.diff(z)
+        d += 1
