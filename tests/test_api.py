@@ -68,3 +68,29 @@ def test_import_defers_heavy_scipy_modules():
     code = "import sys, sigmatau; print([m for m in ('scipy.stats', 'scipy.optimize') if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+#: Names that users could reach at these paths before the package was split into layers
+#: (issue 12), outside the modules' ``__all__``: they stay reachable there.
+KEPT_PATHS = {
+    "sigmatau.imu": ["DEVIATION_RANGE", "NoiseModel", "analyze", "simulate", "from_curve", "kalibr_config"],
+    "sigmatau.analysis": ["IMU_GROUPS", "Reference", "TERMS", "analyze_log", "log_from_arrays"],
+    "sigmatau.outputs": ["FORMULA_TRIGGERS", "umask", "write_outputs", "csv_cell", "kalibr_yaml", "read_manifest"],
+    "sigmatau.batch": ["PathLike", "add_cli", "analyze_many", "expand_patterns", "load_limits"],
+    "sigmatau.chunked": ["PathLike", "VFun", "from_npy", "compute", "DEFAULT_CHUNK", "ChunkedSeries"],
+    "sigmatau.confidence": ["Sided", "Version", "edf", "chi2_interval", "deviation_interval"],
+    "sigmatau.noiseid": ["Family", "LAG1_MIN_POINTS", "identify", "b1_min_averages"],
+    "sigmatau.generate": ["ExpectedStatistic", "Method", "NoiseType", "RngLike", "expected_variance_discrete"],
+    "sigmatau.units": ["Kind", "Term", "pretty", "convert"],
+    "sigmatau.checks": ["check_samples", "check_timestamps", "TimestampWarning", "estimate_lsb"],
+    "sigmatau.plots": ["sigma_tau_figure", "signal_figure", "save_figure"],
+    "sigmatau.cli": ["main", "DEMO_IMU", "EXIT_OK", "EXIT_DATA", "EXIT_USAGE", "EXIT_INTERNAL"],
+}
+
+
+def test_public_paths_survive_the_layering():
+    import importlib
+
+    missing = [f"{mod}.{name}" for mod, names in KEPT_PATHS.items()
+               for name in names if not hasattr(importlib.import_module(mod), name)]
+    assert missing == []

@@ -10,3 +10,4 @@ from .noise.expected import *  # noqa: F401,F403
 from .noise.generate import *  # noqa: F401,F403
 
 __all__ = [*_generate.__all__, *_expected.__all__]
+from .noise.generate import ExpectedStatistic, Method, NoiseType, RngLike  # noqa: F401  (public before the split)

@@ -6,3 +6,5 @@ Public entry point, kept at this path for users; the implementation lives in
 
 from .uncertainty.noiseid import *  # noqa: F401,F403
 from .uncertainty.noiseid import __all__  # noqa: F401
+from .uncertainty.lag1 import LAG1_MIN_POINTS  # noqa: F401  (public before the split, outside __all__)
+from .uncertainty.noisebase import Family  # noqa: F401

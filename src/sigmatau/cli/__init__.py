@@ -8,5 +8,9 @@ every other layer, and nothing but ``python -m sigmatau`` imports it.
 """
 
 from .app import main
+from .common import (  # noqa: F401  (public before the split, outside __all__)
+    EXIT_DATA, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,
+)
+from .simulate import DEMO_IMU  # noqa: F401
 
 __all__ = ["main"]

@@ -13,3 +13,4 @@ core layers; never I/O, reports, the scale-out layer or the CLI.
 
 from .model import *  # noqa: F401,F403
 from .model import __all__  # noqa: F401
+from .model import DEVIATION_RANGE  # noqa: F401  (public before the split, outside __all__)
