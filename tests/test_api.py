@@ -94,3 +94,21 @@ def test_public_paths_survive_the_layering():
     missing = [f"{mod}.{name}" for mod, names in KEPT_PATHS.items()
                for name in names if not hasattr(importlib.import_module(mod), name)]
     assert missing == []
+
+
+def test_modules_moved_into_layers_keep_their_old_paths_and_pickles():
+    import importlib
+    import pickle
+
+    import numpy as np
+
+    for old, name in (("result", "StabilityResult"), ("taus", "select_m"), ("allan", "oadev"),
+                      ("hadamard", "ohdev"), ("theo", "theobr_kappa"), ("tie", "mtie"), ("total", "totdev"),
+                      ("channels", "compute_channels"), ("htmlreport", "render")):
+        assert hasattr(importlib.import_module(f"sigmatau.{old}"), name), old
+    # A result pickled by a version before the layers names its class sigmatau.result.StabilityResult.
+    res = sigmatau.oadev(np.random.default_rng(2).standard_normal(500))
+    old_pickle = pickle.dumps(res, protocol=0).replace(b"sigmatau.core.result", b"sigmatau.result")
+    assert b"sigmatau.result\nStabilityResult" in old_pickle
+    back = pickle.loads(old_pickle)
+    np.testing.assert_array_equal(back.dev, res.dev)

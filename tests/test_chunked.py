@@ -327,6 +327,16 @@ def test_unsupported_statistics_and_names():
         chunked.compute("theo1", src)
 
 
+def test_statistics_without_a_streamed_form_refuse_any_dask_object_by_its_type():
+    # The refusal looks at the type only: a 2-D dask array is not opened (nor its shape
+    # judged) by a statistic that cannot take chunked data at all.
+    da = pytest.importorskip("dask.array")
+    for data in (da.zeros(1000, chunks=100), da.zeros((100, 2), chunks=50)):
+        for stat in (sigmatau.theobr, sigmatau.theoh, sigmatau.theo1, sigmatau.mtotdev, sigmatau.mtie):
+            with pytest.raises(ParameterError, match="does not accept chunked data"):
+                stat(data)
+
+
 def test_import_sigmatau_loads_neither_chunked_nor_dask():
     code = "import sys, sigmatau; print([m for m in ('sigmatau.chunked', 'dask', 'h5py') if m in sys.modules])"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

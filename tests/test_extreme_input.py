@@ -76,7 +76,7 @@ def _quiet(f, *args, **kwargs):
 def test_representable_scales_give_the_unit_scale_answer(series, name, data_type, ci):
     # 1e±150: deviation within float64 but squares of the data near its limits (mtotdev gave
     # NaN at 1e150 before the scaling; TheoBR/TheoH refused beyond 1e±135 before they used
-    # _driver.prepare_scaled).
+    # core.driver.prepare_scaled).
     f = getattr(sigmatau, name)
     reference = _quiet(f, series, data_type=data_type, ci=ci)
     for scale in (1e-150, 1e-100, 1e100, 1e150):
@@ -108,7 +108,7 @@ def test_theobr_kappa_is_scale_free(series):
 
 
 def test_finish_refuses_an_overflowed_variance():
-    # A kernel outside the driver (theo.py) that overflowed must not reach the user as inf.
+    # A kernel outside the driver (stats/theo.py) that overflowed must not reach the user as inf.
     from sigmatau.stats.engine import finish
     from sigmatau.core.result import StabilityResult
 

@@ -356,6 +356,7 @@ def test_hdf5_dataset_and_group(tmp_path):
     log = _quiet_read(p, dataset="/imu")
     assert log.names == ("accel_z", "gyro_x", "gyro_y", "gyro_z")  # HDF5 lists members by name
     assert log.timing.time_unit == "s" and log.rate == 100.0 and log.timing.rate_source == "file"
+    assert log.source.detail == "group /imu, 80 rows"  # named while the file is open (was "group None")
     with pytest.raises(ParameterError) as e:
         io.read(p, dataset="nope")
     _check(e, ParameterError, "no dataset or group 'nope'", r"/imu/gyro \(80, 3\)", r"/raw/table")

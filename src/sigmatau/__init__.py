@@ -8,6 +8,8 @@ the rest of the toolkit; ``sigmatau.io`` reads sensor logs (imported on demand).
 
 from __future__ import annotations
 
+import sys as _sys
+
 from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, units
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
@@ -45,3 +47,17 @@ __all__ = [
     # submodules
     "checks", "confidence", "datasets", "filterchain", "generate", "imu", "noiseid", "units",
 ]
+
+# Modules that sat at the top of the package before it was split into layers keep their
+# dotted paths: ``import sigmatau.theo`` and ``sigmatau.result.StabilityResult`` still work,
+# and results pickled by an earlier version still load.
+from .core import result as _result, taus as _taus  # noqa: E402
+from .report import html as _html  # noqa: E402
+from .scale import channels as _channels  # noqa: E402
+from .stats import allan as _allan, hadamard as _hadamard, theo as _theo, tie as _tie, total as _total  # noqa: E402
+
+for _old, _module in {"result": _result, "taus": _taus, "allan": _allan, "hadamard": _hadamard, "theo": _theo,
+                      "tie": _tie, "total": _total, "channels": _channels, "htmlreport": _html}.items():
+    _sys.modules.setdefault(f"{__name__}.{_old}", _module)
+    globals()[_old] = _module
+del _old, _module

@@ -16,7 +16,6 @@ __all__ = [
     "DataError",
     "SigmaTauWarning",
     "RangeWarning",
-    "caller_stacklevel",
 ]
 
 

@@ -24,8 +24,8 @@ from .result import StabilityResult
 from .taus import select_m
 
 __all__ = [
-    "Statistic", "ScaledPhase", "StreamedSeries", "compute", "prepare", "prepare_scaled", "register_streamed",
-    "streamed",
+    "Statistic", "ScaledPhase", "StreamedSeries", "compute", "is_streamed", "prepare", "prepare_scaled",
+    "register_streamed", "streamed",
 ]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
@@ -94,30 +94,39 @@ class StreamedSeries(Protocol):
         """Attach noise type, EDF and interval to ``result`` (:func:`sigmatau.stats.engine.finish`)."""
 
 
-_ADAPTERS: list[Callable[[object], Optional[StreamedSeries]]] = []
+#: ``(claims, adapt)`` pairs: ``claims(data)`` says, from the type alone, that ``data`` is a record
+#: of that kind; ``adapt(data)`` turns it into a :class:`StreamedSeries` (and may refuse it).
+_ADAPTERS: list[tuple[Callable[[object], bool], Callable[[object], StreamedSeries]]] = []
 
 
-def register_streamed(adapter: Callable[[object], Optional[StreamedSeries]]) -> None:
-    """Register ``adapter(data) -> StreamedSeries or None`` for a foreign record type."""
-    if adapter not in _ADAPTERS:
-        _ADAPTERS.append(adapter)
+def register_streamed(claims: Callable[[object], bool], adapt: Callable[[object], StreamedSeries]) -> None:
+    """Register a foreign record type: ``claims(data) -> bool`` (cheap, by type) and ``adapt(data)``."""
+    if (claims, adapt) not in _ADAPTERS:
+        _ADAPTERS.append((claims, adapt))
+
+
+def _claimed(data: object) -> Optional[Callable[[object], StreamedSeries]]:
+    if isinstance(data, np.ndarray):  # the common case: no adapter asked
+        return None
+    return next((adapt for claims, adapt in _ADAPTERS if claims(data)), None)
+
+
+def is_streamed(data: object) -> bool:
+    """Whether ``data`` is computed piecewise (a :class:`StreamedSeries` or a registered foreign type)."""
+    return hasattr(type(data), "__sigmatau_statistic__") or _claimed(data) is not None
 
 
 def streamed(data: object) -> Optional[StreamedSeries]:
     """``data`` as a :class:`StreamedSeries`, or None for in-memory data."""
     if hasattr(type(data), "__sigmatau_statistic__"):
         return data  # type: ignore[return-value]
-    if isinstance(data, np.ndarray):  # the common case: no adapter asked
-        return None
-    for adapter in _ADAPTERS:
-        src = adapter(data)
-        if src is not None:
-            return src
-    return None
+    adapt = _claimed(data)
+    return None if adapt is None else adapt(data)
 
 
 def _refuse_streamed(stat: Statistic, data: object) -> None:
-    if streamed(data) is not None:
+    # By type only: the record is refused before any adapter looks at its contents.
+    if is_streamed(data):
         raise ParameterError(f"{stat.name} does not accept chunked data; see sigmatau.chunked.STATISTICS")
 
 
@@ -165,7 +174,7 @@ def prepare(stat: Statistic, data: object, rate: object, data_type: object) -> t
     The phase has its linear trend removed when the statistic is invariant to it,
     and is in the user's unit (not scaled). Its magnitude is checked so that the
     caller's kernel cannot overflow or underflow: a phase beyond 2**±450
-    (≈ 1e±135) is a DataError. :func:`finish` checks the variance again.
+    (≈ 1e±135) is a DataError. :func:`~sigmatau.stats.engine.finish` checks the variance again.
     """
     _refuse_streamed(stat, data)
     series, rate_f, dtype, _, k = _validated(stat, data, rate, data_type)
@@ -208,8 +217,8 @@ class ScaledPhase:
 def prepare_scaled(stat: Statistic, data: object, rate: object, data_type: object) -> ScaledPhase:
     """Validate the data and return its phase scaled near 1 (see :class:`ScaledPhase`).
 
-    For a statistic whose kernel is called outside :func:`run` (TheoBR, TheoH): the
-    same scaling as :func:`run`, so data at any scale whose variance float64 can hold
+    For a statistic whose kernel is called outside :func:`~sigmatau.stats.engine.run` (TheoBR, TheoH): the
+    same scaling as :func:`~sigmatau.stats.engine.run`, so data at any scale whose variance float64 can hold
     give the scale-1 answer, while :func:`prepare` refuses a phase beyond 2**±450.
     Every estimator is homogeneous of degree two, var(c·x) = c²·var(x), and a power
     of two changes no digit of the data.

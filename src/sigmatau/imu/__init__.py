@@ -14,3 +14,11 @@ core layers; never I/O, reports, the scale-out layer or the CLI.
 from .model import *  # noqa: F401,F403
 from .model import __all__  # noqa: F401
 from .model import DEVIATION_RANGE  # noqa: F401  (public before the split, outside __all__)
+# Names the single module imu.py had in its namespace before the split (issue 12); kept so
+# that code written against them (``sigmatau.imu.convert``, ``sigmatau.imu.check_samples``) runs.
+from ..core.result import StabilityResult  # noqa: E402,F401
+from ..noise.generate import octave_flicker, power_law_noise  # noqa: E402,F401
+from ..stats.allan import oadev  # noqa: E402,F401
+from ..uncertainty.confidence import ONE_SIGMA, deviation_interval, edf_array  # noqa: E402,F401
+from .checks import DataChecks, check_samples  # noqa: E402,F401
+from .units import CUSTOMARY, TERMS, SensorUnit, convert, pretty, sensor_unit, term_unit  # noqa: E402,F401

@@ -24,7 +24,7 @@ import numpy as np
 
 from ..core.result import StabilityResult
 from ..core.validate import as_series, check_rate
-from ..errors import DataError, ParameterError
+from ..errors import DataError, ParameterError, caller_stacklevel
 from ..stats.allan import oadev
 from ..uncertainty.confidence import ONE_SIGMA, edf_array
 from . import checks as checks_module
@@ -337,7 +337,7 @@ def _curve_of_samples(samples: Any, *, rate: Optional[float], unit: str, scale: 
                                     odr=odr, full_scale=full_scale, warn=False)
         for cls_name, msg in data_checks.warned:
             # stacklevel 3: the caller of analyze(), as before this step was split out
-            warnings.warn(msg, getattr(checks_module, cls_name), stacklevel=3)
+            warnings.warn(msg, getattr(checks_module, cls_name), stacklevel=caller_stacklevel())
         for cls, msg in data_checks.warned:
             quantized = cls == "QuantizationWarning"
             flags.append(Flag("quantized" if quantized else "data", "N" if quantized else "", msg))
@@ -422,7 +422,7 @@ def _warn_flags(flags: Sequence[Flag]) -> None:
         # Q, B and R are unresolved in most records: the flag is enough. N and K
         # feed navigation filters, so their absence is warned about.
         if f.code in ("disagreement", "model") or (f.code == "not-resolved" and f.term in ("N", "K")):
-            warnings.warn(f.message, ImuWarning, stacklevel=3)
+            warnings.warn(f.message, ImuWarning, stacklevel=caller_stacklevel())
 
 
 def _compare(readoff: Mapping[str, Parameter], fit: Mapping[str, Parameter], regions: Mapping[str, Region],

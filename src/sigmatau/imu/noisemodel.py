@@ -32,7 +32,7 @@ __all__ = ["NoiseModel", "optimal_averaging"]
 
 @dataclass(frozen=True, repr=False, eq=False)
 class NoiseModel:
-    """IMU noise model of one channel (see :func:`analyze`).
+    """IMU noise model of one channel (see :func:`~sigmatau.imu.analyze`).
 
     Attributes
     ----------
@@ -266,7 +266,7 @@ def optimal_averaging(model: NoiseModel, *, draws: int = 400) -> OptimalAveragin
     Parameters
     ----------
     model : NoiseModel
-        Result of :func:`analyze`.
+        Result of :func:`~sigmatau.imu.analyze`.
     draws : int
         Monte-Carlo draws from the fit's covariance for the interval.
 

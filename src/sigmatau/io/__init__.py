@@ -48,18 +48,21 @@ Examples
 
 from __future__ import annotations
 
-from ._errors import (
-    FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning, require_optional,
-)
+from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
 from ._limits import MAX_CHANNELS, MAX_LINE_CHARS
 from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
-from ._read import MIN_SAMPLES, check_read_options, detect_format, list_topics, read
-from ._registry import file_sha256, formats
+from ._read import MIN_SAMPLES, detect_format, list_topics, read
+from ._registry import formats
 from ._units import DEFAULT_UNITS, GROUP_UNITS, SI_UNITS, TIME_UNITS
+# For the layers above (batch, chunked), outside __all__ so that ``from sigmatau.io import *``
+# gives what it gave before: read options checked without reading, a file's SHA-256, an
+# optional backend imported or named in one line.
+from ._errors import require_optional  # noqa: F401
+from ._read import check_read_options  # noqa: F401
+from ._registry import file_sha256  # noqa: F401
 
 __all__ = [
     "read",
-    "check_read_options",
     "list_topics",
     "formats",
     "detect_format",
@@ -80,6 +83,4 @@ __all__ = [
     "MIN_SAMPLES",
     "MAX_CHANNELS",
     "MAX_LINE_CHARS",
-    "file_sha256",
-    "require_optional",
 ]

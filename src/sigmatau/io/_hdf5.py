@@ -105,6 +105,7 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
         sel = select(names, numeric, columns=opts.columns, time_column=opts.time_column, path=display)
         rate = _rate_attribute(target, f)
         out = _read_columns(cols, names, sel, display, progress)
+        where = target.name  # read while the file is open (h5py gives None once it is closed)
     data = {names[j]: out[j] for j in sel.channels}
     digest, size = file_sha256(path)
     n = cols.rows
@@ -114,7 +115,7 @@ def read_hdf5(path: Path, display: str, opts: Options, progress: Progress) -> Ta
         time_name=None if sel.time is None else names[sel.time], time_unit=sel.time_unit,
         time_unit_reason=f"from the name {names[sel.time]!r}" if sel.time is not None and sel.time_unit else "",
         units={k: v for k, v in cols.units.items() if k in data}, rate=rate,
-        detail=f"{'dataset' if cols.single else 'group'} {target.name}, {n} rows",
+        detail=f"{'dataset' if cols.single else 'group'} {where}, {n} rows",
         unused=sel.unused + (tuple(cols.left_out) if opts.columns is None else ()),
     )
 

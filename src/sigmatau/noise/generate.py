@@ -5,13 +5,13 @@ Two generators produce a series whose one-sided spectrum is
 
 * ``method="kasdin"``: the Kasdin–Walter fractional-difference filter, exact
   in discrete time, so the expectation of every finite-difference statistic is
-  known exactly (:func:`expected_variance_discrete`);
+  known exactly (:func:`~sigmatau.generate.expected_variance_discrete`);
 * ``method="tip"``: the constructions of ST DT0064 (randn, cumsum, diff and
   the octave-sum flicker generator, :func:`octave_flicker`), whose flicker
   types honour ``h_α`` only approximately.
 
-:func:`expected_variance` gives the continuous-time formulas (numerics.md §6.3)
-and :func:`expected_variance_discrete` the exact discrete-time expectations that
+:func:`~sigmatau.generate.expected_variance` gives the continuous-time formulas (numerics.md §6.3)
+and :func:`~sigmatau.generate.expected_variance_discrete` the exact discrete-time expectations that
 tests should use at small averaging factors (numerics.md §6.1).
 
 Noise types may be given as α or by name (case-insensitive; ``-`` or a space

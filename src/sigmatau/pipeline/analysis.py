@@ -43,7 +43,6 @@ from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TE
 __all__ = [
     "DEFAULT_STATISTICS",
     "STATISTICS",
-    "TERMS",
     "ChannelAnalysis",
     "LogAnalysis",
     "analyze_log",

@@ -87,7 +87,7 @@ class ChannelAnalysis:
 
 @dataclass(frozen=True)
 class LogAnalysis:
-    """The analysis of one log (see :func:`analyze_log`).
+    """The analysis of one log (see :func:`~sigmatau.analysis.analyze_log`).
 
     Attributes
     ----------

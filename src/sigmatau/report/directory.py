@@ -126,7 +126,7 @@ _FIXED_NAMES = ("results.json", "statistics.csv", "model.csv", "imu.yaml", "repo
 
 def check_output_dir(out_dir: Union[str, os.PathLike], *, force: bool = False,
                      protect: Sequence[Union[str, os.PathLike]] = ()) -> None:
-    """Refuse, before any computation, an output directory :func:`write_outputs` would refuse.
+    """Refuse, before any computation, an output directory :func:`~sigmatau.outputs.write_outputs` would refuse.
 
     Allowed: a directory that does not exist (in an existing parent); with
     ``force``, an empty directory or one sigmatau wrote (it holds

@@ -37,7 +37,7 @@ import warnings
 from pathlib import Path
 from typing import Any, Optional, Sequence, Union
 
-from ..errors import ParameterError, SigmaTauError, SigmaTauWarning
+from ..errors import ParameterError, SigmaTauError, SigmaTauWarning, caller_stacklevel
 from .directory import (
     MANIFEST, OutputExistsError, PARTIAL_MARKER, _entry, _manifest_text, _mark, _replace_files, _write_text,
     check_output_dir, read_manifest, remove_stale_partials, umask,
@@ -62,7 +62,7 @@ def _kalibr_text(analysis: Any) -> Optional[str]:
     try:
         return kalibr_yaml(analysis)
     except MissingDependencyError as exc:  # everything else is still useful
-        warnings.warn(f"imu.yaml not written: {exc}", SigmaTauWarning, stacklevel=4)
+        warnings.warn(f"imu.yaml not written: {exc}", SigmaTauWarning, stacklevel=caller_stacklevel())
         return None
 
 
@@ -238,11 +238,11 @@ def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool) -
             if "matplotlib" not in str(exc) and "plot" not in str(exc):
                 raise
             figure_note = f"Figures not made: {exc}"
-            warnings.warn(f"figures not written: {exc}", SigmaTauWarning, stacklevel=3)
+            warnings.warn(f"figures not written: {exc}", SigmaTauWarning, stacklevel=caller_stacklevel())
         else:
             figure_note = _figure_cap_note(analysis)
             if figure_note:
-                warnings.warn(figure_note, SigmaTauWarning, stacklevel=3)
+                warnings.warn(figure_note, SigmaTauWarning, stacklevel=caller_stacklevel())
     data = analysis.to_dict()
     data["figures"] = [{**f, "files": [f"{f['stem']}.{e}" for e in fmts]} for f in figs]
     if figure_note:

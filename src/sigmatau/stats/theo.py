@@ -36,7 +36,7 @@ from ..core.kernels import oavar_kernel
 from .allan import _doc
 from ..uncertainty.confidence import ONE_SIGMA
 from ..uncertainty.noiseid import theo_noise_id
-from ..errors import DataError, ParameterError, RangeWarning
+from ..errors import DataError, ParameterError, RangeWarning, caller_stacklevel
 from ..core.result import StabilityResult
 from .theo_sums import theo1_sums
 from ..core.taus import TAU_GRIDS, is_numeric, m_grid, select_m
@@ -139,7 +139,7 @@ def _kappa(x: np.ndarray, method: str = "fast") -> TheoBRKappa:
         warnings.warn(
             f"TheoBR κ = {kap.kappa:.4g} from blocks of {block} points indicates phase noise (WPM/FPM), for"
             f" which Fast TheoBR overestimates κ (by tens of percent at this length); kappa='exact' gives the"
-            f" published κ at O(N²) cost", RangeWarning, stacklevel=3)
+            f" published κ at O(N²) cost", RangeWarning, stacklevel=caller_stacklevel())
     return TheoBRKappa(kappa=kap.kappa, n=kap.n, n_points=int(N), block=int(block))
 
 
@@ -505,7 +505,7 @@ def _theoh_factors(
                 f"theoh: {int(off.sum())} requested τ are not multiples of τ0 (AVAR part) or"
                 " 1.5·τ0 (TheoBR part); they were rounded to the nearest usable averaging factor",
                 RangeWarning,
-                stacklevel=3,
+                stacklevel=caller_stacklevel(),
             )
         ma = select_m("theoh", taus="octave", m=ma, m_min=1, m_max=k - 1, stop_ratio=1, **common) if ma.size else ma
         mb = (select_m("theoh", taus="octave", m=mb, m_min=m_lo, m_max=m_max, stop_ratio=1, even=True,

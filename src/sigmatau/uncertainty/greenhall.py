@@ -234,7 +234,7 @@ def greenhall_edf(alpha: int, d: int, m: int, F: int, S: int, N: int, *,
     -------
     float
         ν, or NaN when ``N`` is shorter than the filter length ``L = m/F + m·d``
-        (see :func:`edf_reason`).
+        (see :func:`~sigmatau.confidence.edf_reason`).
 
     Raises
     ------

@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Optional, Sequence, Union
 
 from ..._version import __version__
-from ...errors import SigmaTauWarning
+from ...errors import SigmaTauWarning, caller_stacklevel
 from ...pipeline.analysis import DEFAULT_STATISTICS, json_ready
 from ...uncertainty.confidence import ONE_SIGMA
 from .cluster import (_connect, _distributed, _probe_scheduler, check_scheduler_address, local_worker_count,
@@ -71,7 +71,7 @@ def analyze_many(
     scheduler : str, optional
         Address of an existing scheduler (``"tcp://host:8786"``) to connect to;
         checked by :func:`check_scheduler_address` and reached within
-        :data:`CONNECT_TIMEOUT` seconds before ``out`` is created.
+        :data:`~sigmatau.scale.batch.common.CONNECT_TIMEOUT` seconds before ``out`` is created.
     workers : int, optional
         Without ``client`` and ``scheduler``: a ``LocalCluster`` of this many
         single-threaded worker processes (default: the usable cores), at most
@@ -301,7 +301,7 @@ def _open_client(client: Any, scheduler: Optional[str], workers: Optional[int], 
     n_workers, note = local_worker_count(workers, n_logs, usable_cores())
     if local and note:
         # stacklevel: _open_client, _analyse_pending, _run_batch, analyze_many, then its caller.
-        warnings.warn(note, SigmaTauWarning, stacklevel=5)
+        warnings.warn(note, SigmaTauWarning, stacklevel=caller_stacklevel())
     return _connect(client, scheduler, n_workers)
 
 

@@ -36,14 +36,14 @@ def compute(
     statistic : str
         One of :data:`STATISTICS`.
     source : ChunkedSeries, dask array, path or array_like
-        A path is opened by :func:`open_series` (``.npy``; HDF5 with
+        A path is opened by :func:`~sigmatau.chunked.open_series` (``.npy``; HDF5 with
         ``dataset``; raw binary with ``dtype`` and ``offset``).
     rate, data_type, taus, m, points_per_decade, alpha, confidence, ci
         As for the statistic's own function.
     chunk_size : int, optional
-        Samples per read (default :data:`DEFAULT_CHUNK`, or the series' own).
+        Samples per read (default :data:`~sigmatau.chunked.DEFAULT_CHUNK`, or the series' own).
     dtype, offset, dataset
-        How to read a path (see :func:`open_series`).
+        How to read a path (see :func:`~sigmatau.chunked.open_series`).
     **options
         Further keywords of the statistic (``bias`` for ``totdev``).
 

@@ -356,18 +356,32 @@ def as_chunked(data: object, *, chunk_size: Optional[int] = None, **open_options
     return from_array(data, chunk_size=size)
 
 
-def _adapt_dask(data: object) -> Optional[ChunkedSeries]:
-    """A dask array as a ChunkedSeries (registered with :func:`~sigmatau.core.driver.register_streamed`).
-
-    Recognised by its type's module so that dask is never imported for this test;
-    a dask collection that is not an array gets the one-line error of :func:`as_chunked`.
-    """
-    if type(data).__module__.startswith("dask."):
-        return as_chunked(data)
-    return None
+def _is_dask(data: object) -> bool:
+    """A dask object, recognised by its type's module so that dask is never imported for this test."""
+    return type(data).__module__.startswith("dask.")
 
 
-register_streamed(_adapt_dask)
+class _DaskRecord:
+    """A dask object given to a statistic: opened as a ChunkedSeries only once the statistic has
+    accepted chunked data, so a statistic without a streamed form refuses it first, whatever its shape."""
+
+    def __init__(self, data: object) -> None:
+        self.data = data
+
+    def __sigmatau_statistic__(self, stat: Statistic, **options: object) -> StabilityResult:
+        return _run(stat, self.data, **options)  # type: ignore[arg-type]
+
+    def __sigmatau_finish__(self, result: StabilityResult, data_type: str, **options: object) -> StabilityResult:
+        return _finish(result, self.data, data_type, **options)  # type: ignore[arg-type]
+
+
+def _adapt_dask(data: object) -> _DaskRecord:
+    """A dask object as a streamed record (registered with :func:`~sigmatau.core.driver.register_streamed`);
+    a dask collection that is not an array gets the one-line error of :func:`as_chunked` when opened."""
+    return _DaskRecord(data)
+
+
+register_streamed(_is_dask, _adapt_dask)
 
 
 # ------------------------------------------------------- validation and scaling
