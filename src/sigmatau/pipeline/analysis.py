@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import math
 import os
@@ -38,6 +39,7 @@ import numpy as np
 from ..uncertainty.confidence import ONE_SIGMA
 from ..errors import DataError, ParameterError, SigmaTauError
 from ..core.result import StabilityResult
+from ..uncertainty.attach import attach
 from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TERMS, json_ready
 
 __all__ = [
@@ -236,6 +238,11 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
         if stat == "oadev" and model is not None:
             results[stat] = model.result  # the very curve the model was fitted on
             continue
+        if stat == "tdev" and "mdev" in results:
+            derived = _tdev_from_mdev(results["mdev"])  # TVAR = τ²/3·MVAR: no second pass over the record
+            if derived is not None:
+                results[stat] = derived
+                continue
         try:
             results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
                                                     confidence=confidence)
@@ -247,6 +254,41 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
     return ChannelAnalysis(name=name, group=group, unit=unit, n_samples=int(x.size), results=results,
                            skipped=skipped, model=model, model_note=note, datasheet=rows,
                            seconds=time.perf_counter() - t0)
+
+
+def _tdev_from_mdev(mdev_result: StabilityResult) -> Optional[StabilityResult]:
+    """TDEV of a record from its MDEV result, without computing MVAR again.
+
+    .. math:: σ_x^2(τ) = \\frac{τ^2}{3}\\,\\mathrm{Mod}\\,σ_y^2(τ),\\quad τ = mτ_0
+
+    (W. J. Riley, NIST SP 1065 (2008) §5.2.6). The variance is the one
+    :func:`sigmatau.tdev` computes, bit for bit: the kernel forms the same product in the
+    same order on data scaled by a power of two, and that scaling is exact. The
+    noise type of each row is MDEV's (both are identified with the rules of the
+    modified family at the same factors and term counts), and the EDF and interval
+    are attached from it by the same step as :func:`tdev`.
+
+    ``mdev_result`` must come from :func:`sigmatau.mdev` with ``ci="chi2"`` (as
+    every statistic of the main job does). Returns None when it cannot stand for
+    :func:`sigmatau.tdev`'s result: no noise type identified (``ci=None`` or a
+    forced ``alpha``), a row whose noise type was not identified (the reason is
+    tdev's own), or a variance float64 cannot hold. The caller computes TDEV then.
+    """
+    if mdev_result.statistic != "mdev" or mdev_result.alpha is None or mdev_result.alpha_estimate is None:
+        return None
+    if mdev_result.confidence is None or not np.all(np.isfinite(mdev_result.alpha)):
+        return None
+    tau0 = 1.0 / mdev_result.rate
+    with np.errstate(over="ignore"):
+        var = mdev_result.var * (mdev_result.m * tau0) ** 2 / 3.0
+    if not np.all(np.isfinite(var)):
+        return None
+    raw = dataclasses.replace(
+        mdev_result, statistic="tdev", var=var, dev=np.sqrt(var), alpha=None, alpha_estimate=None, edf=None,
+        ci_low=None, ci_high=None, confidence=None, ci_reason=None,
+    )
+    return attach(raw, np.empty(0), mdev_result.data_type, alpha=None, confidence=mdev_result.confidence,
+                  ci="chi2", identified=(mdev_result.alpha, mdev_result.alpha_estimate))
 
 
 def _nothing_computed(n_samples: int, channel: ChannelAnalysis) -> str:
