@@ -44,3 +44,30 @@ def test_the_main_job_reports_the_tdev_of_tdev(rng):
         _assert_same(ch.results["tdev"], sigmatau.tdev(y[:, col], rate=100.0))
     alone = analyze_log(log, statistics=("tdev",), model=False, workers=1)  # no MDEV to share: computed
     _assert_same(alone.channels[0].results["tdev"], sigmatau.tdev(y[:, 0], rate=100.0))
+
+
+def test_the_main_job_uses_fast_theobr_and_says_so():
+    y = sigmatau.power_law_noise(200_000, alpha=-1, rng=7)
+    log = log_from_arrays({"gyro_x": y}, rate=1000.0, units={"gyro": "rad/s"})
+    fast = analyze_log(log, statistics=("theoh",), model=False, workers=1)
+    exact = analyze_log(log, statistics=("theoh",), model=False, workers=1, theoh="exact")
+    assert fast.settings["theoh"] == "fast" and exact.settings["theoh"] == "exact"
+    _assert_same(fast.channels[0].results["theoh"], sigmatau.theoh(y, rate=1000.0, method="fast"))
+    _assert_same(exact.channels[0].results["theoh"], sigmatau.theoh(y, rate=1000.0))
+    assert "fast theobr on blocks of 4 points" in fast.channels[0].results["theoh"].bias
+    with pytest.raises(sigmatau.ParameterError, match="theoh='quick'"):
+        analyze_log(log, statistics=("theoh",), model=False, theoh="quick")
+
+
+def test_cli_theoh_option(tmp_path, capsys):
+    from helpers import run_cli
+
+    y = sigmatau.power_law_noise(3000, alpha=0, rng=9)
+    log = tmp_path / "clock.txt"
+    log.write_text("\n".join(f"{v:.12g}" for v in y) + "\n")
+    code, out, err = run_cli(["stats", str(log), "--data-type", "freq", "--rate", "1", "--stat", "theoh",
+                              "--csv", str(tmp_path / "t.csv")], capsys)
+    assert code == 0, err
+    code, out, err = run_cli(["stats", str(log), "--data-type", "freq", "--rate", "1", "--stat", "theoh",
+                              "--theoh", "quick"], capsys)
+    assert code == 2 and "--theoh" in err

@@ -165,6 +165,7 @@ def test_results_json_records_everything(analyzed, imu_csv):
     s = data["settings"]
     assert s["statistics"] == ["oadev", "mdev", "tdev", "ohdev", "totdev", "theoh"]
     assert s["confidence"] == pytest.approx(0.6827) and s["axis_rule"] == "max"
+    assert s["theoh"] == "fast"  # the main job's default (docs/theoh-fast.md)
     assert data["log"]["timing"]["gaps"] == [] and data["log"]["rate"] == pytest.approx(100.0)
     chans = {c["name"]: c for c in data["channels"]}
     assert list(chans) == ["gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z"]

@@ -36,6 +36,7 @@ import numpy as np
 import pytest
 
 import refdata
+import sigmatau
 from sigmatau.stats import theo, theo_sums
 from sigmatau.stats.allan import oadev
 from sigmatau.datasets import nbs1000
@@ -583,3 +584,48 @@ def test_fast_kappa_reaches_theobr_and_theoh(monkeypatch):
             theo.theoh(y, kappa=bad)
         with pytest.raises(ParameterError, match="method"):
             theo.theobr_kappa(y, method=bad)
+
+
+# --- Fast TheoBR rows of TheoH (method="fast", the main job's default) ---------------------------
+
+
+def test_theoh_fast_is_exact_up_to_the_block_threshold():
+    y = sigmatau.power_law_noise(theo.THEOH_FAST_POINTS - 1, alpha=0, rng=21)  # N = THEOH_FAST_POINTS
+    fast, exact = sigmatau.theoh(y, method="fast"), sigmatau.theoh(y)
+    for f in ("m", "taus", "var", "n", "alpha", "edf", "ci_low", "ci_high"):
+        np.testing.assert_array_equal(getattr(fast, f), getattr(exact, f), err_msg=f)
+    assert fast.bias == exact.bias
+
+
+@pytest.mark.parametrize("alpha", [0, -1, -2])
+def test_theoh_fast_agrees_with_the_definition_for_fm_noise(alpha):
+    # docs/theoh-fast.md: at N = 2**20 the TheoBR rows differ by ≤ 4.6e-4 (WFM), 5.9e-5 (FFM),
+    # 5.4e-5 (RWFM); here N = 2**18 (blocks of 5) at the very same factors, held to 2e-3.
+    y = sigmatau.power_law_noise(1 << 18, alpha=alpha, rng=30 + alpha)
+    fast = sigmatau.theoh(y, method="fast", ci=None)
+    high = fast.bias_factor != 1.0
+    block = -(-((1 << 18) + 1) // theo.THEOH_FAST_POINTS)
+    assert "fast theobr on blocks of 5 points" in fast.bias and block == 5
+    assert np.all(fast.m[high] % (2 * block) == 0) and high.sum() >= 3
+    exact = sigmatau.theoh(y, m=fast.m, ci=None)
+    np.testing.assert_array_equal(fast.var[~high], exact.var[~high])  # the AVAR rows are the same
+    assert np.max(np.abs(fast.dev[high] / exact.dev[high] - 1)) < 2e-3
+    np.testing.assert_allclose(fast.taus, 0.75 * fast.m * 1.0 * np.where(high, 1, 4 / 3))
+
+
+@pytest.mark.parametrize("alpha", [2, 1])
+def test_theoh_fast_declines_phase_noise(alpha):
+    # Block averages remove white and flicker PM (Fast TheoBR reads them 24-79 % low): κ says PM,
+    # so the exact rows are computed and the bias says why.
+    y = sigmatau.power_law_noise(100_000, alpha=alpha, rng=40 + alpha)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RangeWarning)  # Fast κ on phase noise (its own warning)
+        fast, exact = sigmatau.theoh(y, method="fast", ci=None), sigmatau.theoh(y, ci=None)
+    assert "exact theobr (kappa indicates phase noise" in fast.bias
+    np.testing.assert_array_equal(fast.var, exact.var)
+    np.testing.assert_array_equal(fast.m, exact.m)
+
+
+def test_theoh_method_is_checked():
+    with pytest.raises(ParameterError, match="method='quick' must be one of"):
+        sigmatau.theoh(np.random.default_rng(1).standard_normal(500), method="quick")

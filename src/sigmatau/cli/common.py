@@ -105,7 +105,7 @@ def _add_input_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--debug", action="store_true", help="show the traceback of an error")
 
 
-def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str) -> None:
+def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh: str = "fast") -> None:
     g = p.add_argument_group("analysis")
     g.add_argument("--stat", default=default_stats,
                    help=f"statistics, comma-separated (default {default_stats}); any of stdev, ostdev, adev, oadev,"
@@ -115,6 +115,9 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str) -> Non
     g.add_argument("--confidence", type=float, default=0.6827, help="two-sided coverage of the intervals"
                                                                      " (default 0.6827, ±1σ)")
     g.add_argument("--workers", type=int, help="channels analysed at once (default: the cores)")
+    g.add_argument("--theoh", choices=["fast", "exact"], default=theoh,
+                   help=f"TheoH's TheoBR rows: fast (Fast TheoBR on block averages above 65,536 points, unless"
+                        f" κ indicates phase noise) or exact (default {theoh}; docs/theoh-fast.md)")
 
 
 def _read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -287,7 +290,7 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
     analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
                            model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
                            rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
-                           progress=console.progress)
+                           progress=console.progress, theoh=args.theoh)
     protect = [] if log.source.format == "memory" else [log.source.path]
     files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
                           report=not args.no_report, protect=protect)

@@ -34,7 +34,7 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         return _stats_chunked(args)
     log = _read(args, console)
     a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
-                    workers=args.workers, progress=console.progress)
+                    workers=args.workers, progress=console.progress, theoh=args.theoh)
     _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
                                   f" data, {a.settings['confidence']:.2%} intervals")
     for w in a.warnings:
@@ -123,7 +123,7 @@ def add_cli(sub: Any) -> None:
               sigmatau stats gyro.bin --chunked --dtype '<f4' --offset 512 --rate 200
             """) + _EPILOG_ERRORS)
     _add_input_options(stats)
-    _add_analysis_options(stats, "oadev")
+    _add_analysis_options(stats, "oadev", theoh="exact")  # Stable32-like tables: the definition
     stats.add_argument("--csv", help="write every table to this CSV file ('-' for stdout) instead of printing")
     stats.add_argument("--force", action="store_true", help="replace an existing CSV file")
     big = stats.add_argument_group("records larger than memory (sigmatau.chunked)")

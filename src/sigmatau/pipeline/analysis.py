@@ -201,7 +201,8 @@ def check_statistics(statistics: Sequence[str]) -> tuple[str, ...]:
 
 
 def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
-             reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool) -> ChannelAnalysis:
+             reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
+             theoh: str = "fast") -> ChannelAnalysis:
     from ..imu import model as imu
     from ..stats import FUNCTIONS
     from ..imu.units import sensor_unit
@@ -243,9 +244,10 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
             if derived is not None:
                 results[stat] = derived
                 continue
+        extra = {"method": theoh} if stat == "theoh" else {}
         try:
             results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
-                                                    confidence=confidence)
+                                            confidence=confidence, **extra)
         except DataError as exc:
             skipped[stat] = str(exc)
     rows: tuple[dict, ...] = ()
@@ -318,6 +320,7 @@ def analyze_log(
     datasheet: Union[str, Mapping[str, Any], None] = None,
     workers: Optional[int] = None,
     progress: Optional[Callable[[str], None]] = None,
+    theoh: str = "fast",
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -351,6 +354,11 @@ def analyze_log(
         Channels analysed at once (threads; default the usable cores).
     progress : callable, optional
         Called with a line of text as each channel finishes.
+    theoh : {"fast", "exact"}
+        How TheoH's TheoBR rows are computed (:func:`sigmatau.theoh` ``method``):
+        ``"fast"`` (default) uses Fast TheoBR on block averages above 65,536
+        phase points, unless κ indicates phase noise; ``"exact"`` the definition.
+        docs/theoh-fast.md gives the difference.
 
     Returns
     -------
@@ -369,17 +377,20 @@ def analyze_log(
         raise ParameterError(f"axis_rule={axis_rule!r} must be 'max', 'rms' or 'mean'")
     if not isinstance(confidence, (int, float)) or isinstance(confidence, bool) or not 0 < confidence < 1:
         raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
+    if theoh not in ("fast", "exact"):
+        raise ParameterError(f"theoh={theoh!r} must be 'fast' or 'exact'")
     reference = datasheet_reference(datasheet)
     log, notes = _longest_segment(log)
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names))
-    done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress)
+    done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
+                                   theoh)
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
                 "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
                 "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
-                "workers": workers}
+                "workers": workers, "theoh": theoh}
     return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
                        notes=tuple(notes), warnings=tuple(seen),
                        seconds=time.perf_counter() - t0)
@@ -420,12 +431,13 @@ def _worker_count(workers: Optional[int], n_channels: int) -> int:
 
 def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: Any, confidence: float,
                       reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
-                      progress: Optional[Callable[[str], None]]) -> tuple[list[ChannelAnalysis], list[str]]:
+                      progress: Optional[Callable[[str], None]],
+                      theoh: str = "fast") -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
     from ..imu.model import ImuWarning
 
     def one(name: str) -> ChannelAnalysis:
-        ch = _channel(log, name, stats, taus, confidence, reference, model)
+        ch = _channel(log, name, stats, taus, confidence, reference, model, theoh)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch

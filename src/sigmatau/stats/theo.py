@@ -42,7 +42,8 @@ from .theo_sums import theo1_sums
 from ..core.taus import TAU_GRIDS, is_numeric, m_grid, select_m
 from .theo_bias import _apply_theo1_bias, _check_theo1_bias
 
-__all__ = ["theo1", "theobr", "theoh", "theobr_kappa", "theoh_split", "TheoBRKappa", "KAPPA_FAST_POINTS"]
+__all__ = ["theo1", "theobr", "theoh", "theobr_kappa", "theoh_split", "TheoBRKappa", "KAPPA_FAST_POINTS",
+           "THEOH_FAST_POINTS"]
 
 
 def _theo1_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
@@ -520,11 +521,55 @@ def _theoh_factors(
     return ma, mb
 
 
+#: TheoH methods for the TheoBR rows: the definition on the whole record, or Fast TheoBR.
+TheoHMethod = Literal["exact", "fast"]
+_THEOH_METHODS = ("exact", "fast")
+#: Phase points up to which ``theoh(method="fast")`` still computes the TheoBR rows exactly;
+#: longer records are averaged in blocks down to at most this many points.
+THEOH_FAST_POINTS = 1 << 16
+
+
+def _check_theoh_method(method: object) -> str:
+    if not isinstance(method, str) or method not in _THEOH_METHODS:
+        raise ParameterError(f"method={method!r} must be one of {_THEOH_METHODS} (how TheoH's TheoBR rows are computed)")
+    return method
+
+
+def _theoh_block(N: int) -> int:
+    """Block of Fast TheoBR for N phase points: 1 (exact) up to THEOH_FAST_POINTS."""
+    return max(1, -(-N // THEOH_FAST_POINTS))
+
+
+def _theobr_rows(x: np.ndarray, mb: np.ndarray, tau0: float, block: int,
+                 m_lo: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Factors, Theo1 variances and term counts of TheoH's TheoBR rows (κ not applied).
+
+    ``block`` 1 is the definition on ``x``. A larger block is Fast TheoBR (Taylor &
+    Howe 2010): Theo1 of the record averaged in blocks of ``block`` points, at the
+    even factors m' nearest to m/block (at least m_lo/block), reported at m = block·m'.
+    """
+    empty = (np.empty(0, dtype=np.int64), np.empty(0), np.empty(0, dtype=np.int64))
+    if mb.size == 0:
+        return empty
+    if block == 1:
+        vb, nb = _theo1_kernel(x, mb, tau0)
+        return mb, vb, nb
+    k = x.size // block
+    averaged = x[: k * block].reshape(k, block).mean(axis=1)
+    lowest = 2 * (-(-m_lo // (2 * block)))
+    mp = np.unique(np.maximum(2 * np.round(mb / (2.0 * block)).astype(np.int64), lowest))
+    mp = mp[mp <= k - 1]
+    if mp.size == 0:
+        return empty
+    vb, nb = _theo1_kernel(averaged, mp, block * tau0)
+    return block * mp, vb, nb
+
+
 @_doc
 def theoh(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
     points_per_decade: int = 10, alpha: Optional[int] = None, confidence: float = ONE_SIGMA,
-    ci: Optional[CiMethod] = "chi2", kappa: KappaMethod = "fast",
+    ci: Optional[CiMethod] = "chi2", kappa: KappaMethod = "fast", method: TheoHMethod = "exact",
 ) -> StabilityResult:
     """Hybrid TheoH deviation: AVAR at short τ, TheoBR at long τ.
 
@@ -542,6 +587,17 @@ def theoh(
     as in TheoBR's κ; κ is computed once for the whole record, by the
     ``kappa`` method of :func:`theobr` (Fast TheoBR above 16384 phase points
     unless ``kappa="exact"``).
+
+    ``method="fast"`` computes the TheoBR rows of records longer than
+    :data:`THEOH_FAST_POINTS` phase points on the record averaged in blocks of
+    ``b = ⌈N/THEOH_FAST_POINTS⌉`` points (Fast TheoBR, Taylor & Howe 2010),
+    at factors ``m = b·m'`` (``m'`` even; τ = 0.75·m·τ0, so each τ moves by
+    less than ``b·τ0`` from the exact grid's) and ``n`` counts the averaged
+    record's terms. It costs O(N) instead of O(N log² m) per τ; its difference
+    from the exact TheoBR is measured in ``docs/theoh-fast.md``. ``result.bias``
+    names the block. The AVAR rows are the same. Block averages remove white
+    and flicker PM, so when κ indicates phase noise (:func:`sigmatau.noiseid.theo_noise_id`
+    of κ at least 1) the exact rows are computed instead, and ``result.bias`` says so.
 
     Rows are sorted by τ; ``result.m`` is each row's own factor and
     ``result.taus`` its τ. Rows with ``taus < k`` are OAVAR (``taus == m·τ0``,
@@ -572,7 +628,8 @@ def theoh(
     'theoh: oavar for tau < 100 s (m < 100); theobr kappa=1.085666 (n=30) for tau >= 100 s (even m >= 134, tau = 0.75 m tau0)'
     """
     check_options(alpha, confidence, ci)
-    method = _check_kappa_method(kappa)
+    kappa_method = _check_kappa_method(kappa)
+    theoh_method = _check_theoh_method(method)
     # Scaled phase as in theobr(); the variance is unscaled before the low/high split.
     p = _driver.prepare_scaled(THEOH, data, rate, data_type)
     x, rate_f, dtype = p.phase, p.rate, p.data_type
@@ -580,9 +637,15 @@ def theoh(
     _check_kappa_points(N, dtype)
     tau0 = 1.0 / rate_f
     ma, mb = _theoh_factors(N, rate_f, taus, m, points_per_decade)
-    kap = _kappa(x, method)
+    kap = _kappa(x, kappa_method)
     va, na = oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
-    vb, nb = _theo1_kernel(x, mb, tau0) if mb.size else (np.empty(0), np.empty(0, dtype=np.int64))
+    block = _theoh_block(N) if theoh_method == "fast" else 1
+    declined = block > 1 and bool(theo_noise_id(kap.kappa) >= 1)
+    if declined:
+        # Block averages remove white and flicker PM: Fast TheoBR reads it 24-79 % low
+        # (docs/theoh-fast.md). κ says the record is PM-dominated: the exact rows instead.
+        block = 1
+    mb, vb, nb = _theobr_rows(x, mb, tau0, block, theoh_split(N)[1])
     var = np.concatenate((np.asarray(va, dtype=float), kap.kappa * vb))
     var = unscale_variance(np.where(var < 0.0, 0.0, var), p.exponent, "theoh")
     k, m_lo = theoh_split(N)
@@ -590,6 +653,10 @@ def theoh(
         f"theoh: oavar for tau < {k * tau0:g} s (m < {k}); {_kappa_text(kap)} for tau >= {k * tau0:g} s"
         f" (even m >= {m_lo}, tau = 0.75 m tau0)"
     )
+    if block > 1 and mb.size:
+        bias += f"; fast theobr on blocks of {block} points (m = {block}·even m')"
+    elif declined:
+        bias += "; exact theobr (kappa indicates phase noise, which block averages would remove)"
     common = dict(rate=rate_f, data_type=dtype, n_points=int(N), bias=bias)
     # Each part gets the EDF of its own estimator: Greenhall's OAVAR EDF with the
     # noise identified at m below k, the Theo1 EDF with the noise type from κ above.
