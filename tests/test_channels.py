@@ -72,9 +72,3 @@ def test_long_factor_silence_stays_in_its_thread():
         worker.join()
     with long_factors_expected():
         sigmatau.oadev(x, m=[1500], ci=None)  # filterwarnings=error: a warning here fails the test
-
-
-def test_parallel_theo1_warns_nothing_under_many_runs():
-    data = _channels(n=8000, k=4)
-    for _ in range(5):
-        sigmatau.compute_channels(sigmatau.theo1, data, workers=2, rate=50.0)

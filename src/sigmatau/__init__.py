@@ -11,10 +11,10 @@ from __future__ import annotations
 import sys as _sys
 
 from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, units
+from .core.driver import register_streamed as _register_streamed
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .stats.allan import adev, mdev, oadev, ostdev, stdev, tdev
-from .scale import chunked as _chunked  # noqa: F401  (registers dask arrays as streamed records)
 from .scale.channels import compute_channels
 from .uncertainty.confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
@@ -47,6 +47,23 @@ __all__ = [
     # submodules
     "checks", "confidence", "datasets", "filterchain", "generate", "imu", "noiseid", "units",
 ]
+
+
+
+def _is_dask(data: object) -> bool:
+    # By the type's module: dask is never imported for this test.
+    return type(data).__module__.startswith("dask.")
+
+
+def _dask_record(data: object) -> object:
+    # The scale-out layer loads when the first dask object reaches a statistic, not at import.
+    from .scale.chunked.sources import adapt_dask
+
+    return adapt_dask(data)
+
+
+# Dask objects reach the statistics as streamed records (core.driver.StreamedSeries).
+_register_streamed(_is_dask, _dask_record)
 
 # Modules that sat at the top of the package before it was split into layers keep their
 # dotted paths: ``import sigmatau.theo`` and ``sigmatau.result.StabilityResult`` still work,

@@ -1,7 +1,7 @@
 """The weighted fit of the five-term model to the AVAR curve, its term selection and intervals.
 
 How the fit works is described in :func:`sigmatau.imu.analyze` (*Fit*, *Intervals*):
-a weighted non-negative least-squares fit (``_irls``) with the sandwich
+a weighted non-negative least-squares fit (``irls_fit``, shared with ``fit_power_law``) with the sandwich
 covariance of variance estimates correlated across τ (``_correlation``), a
 model-discrepancy floor when the χ² says the curve departs from the model
 (``_discrepancy``), backward term selection (``_select_terms``), upper bounds
@@ -19,6 +19,7 @@ from scipy.special import chdtrc, ndtri
 
 from ..errors import DataError
 from ..uncertainty.noiseid import OCTAVE_CORRELATION
+from ..uncertainty.powerfit import irls_fit
 from .results import Parameter
 from .terms import _ALPHA, _design
 from .units import TERMS, SensorUnit
@@ -87,28 +88,8 @@ def _chi2_tail(chi2: float, mean: float, sd: float) -> float:
 
 
 def _irls(design: np.ndarray, var: np.ndarray, rel: np.ndarray, signed: np.ndarray, iterations: int = 3):
-    """Weighted least squares with non-negative coefficients (except ``signed``
-    columns), weights from the model variance: σ_i = model_i·rel_i, three
-    reweighting passes (as :func:`sigmatau.noiseid.fit_power_law`, whose helper
-    has no signed columns)."""
-    from scipy.optimize import lsq_linear, nnls  # imported here: keeps `import sigmatau` light
-
-    sigma = var * rel
-    lower = np.where(signed, -np.inf, 0.0)
-    for it in range(iterations + 1):
-        a = design / sigma[:, None]
-        scale = np.linalg.norm(a, axis=0)
-        scale[scale == 0] = 1.0
-        if signed.any():
-            hs = lsq_linear(a / scale, var / sigma, bounds=(lower, np.inf), method="bvls").x
-        else:
-            hs, _ = nnls(a / scale, var / sigma)
-        h = hs / scale
-        model = design @ h
-        if it < iterations:
-            sigma = np.where(model > 0, model, var) * rel
-    resid = (var - model) / sigma
-    return h, sigma, float(np.einsum("i,i->", resid, resid))
+    """:func:`sigmatau.uncertainty.powerfit.irls_fit` with the ``signed`` columns (Q's may be negative)."""
+    return irls_fit(design, var, rel, signed=signed, iterations=iterations)
 
 
 def _normal_inverse(aw: np.ndarray) -> np.ndarray:

@@ -295,21 +295,38 @@ class PowerLawFit:
         return f"PowerLawFit({self.statistic}: {terms}; chi2/dof={self.chi2:.3g}/{self.dof})"
 
 
-def _weighted_nnls(design: np.ndarray, var: np.ndarray, nu: np.ndarray, iterations: int):
-    """IRLS non-negative fit; weights from the model variance, var(σ²) ≈ 2σ⁴/ν.
+def irls_fit(design: np.ndarray, var: np.ndarray, rel: np.ndarray, *, signed: Optional[np.ndarray] = None,
+             iterations: int = 3) -> tuple[np.ndarray, np.ndarray, float]:
+    """Iteratively reweighted least squares of ``var`` on the columns of ``design``.
 
-    Returns the coefficients, the per-τ standard errors used as weights and the
-    weighted χ².
+    The coefficients are non-negative except those of the ``signed`` columns. The
+    weights come from the model variance, σ_i = model_i·rel_i (the first pass from
+    the data), with ``iterations`` reweighting passes; the columns are scaled to
+    unit norm for the solver. Shared by :func:`fit_power_law` (rel = √(2/ν):
+    var(σ²) ≈ 2σ⁴/ν) and the IMU model's fit.
+
+    Returns
+    -------
+    h : numpy.ndarray
+        The coefficients.
+    sigma : numpy.ndarray
+        The per-τ standard errors used as weights in the last pass.
+    chi2 : float
+        The weighted sum of squared residuals.
     """
-    from scipy.optimize import nnls  # imported here: keeps `import sigmatau` light
+    from scipy.optimize import lsq_linear, nnls  # imported here: keeps `import sigmatau` light
 
-    rel = np.sqrt(2.0 / nu)
     sigma = var * rel
+    bounded = signed is None or not np.any(signed)
+    lower = None if bounded else np.where(signed, -np.inf, 0.0)
     for it in range(iterations + 1):
         a = design / sigma[:, None]
         scale = np.linalg.norm(a, axis=0)
         scale[scale == 0] = 1.0
-        hs, _ = nnls(a / scale, var / sigma)
+        if bounded:
+            hs, _ = nnls(a / scale, var / sigma)
+        else:
+            hs = lsq_linear(a / scale, var / sigma, bounds=(lower, np.inf), method="bvls").x
         h = hs / scale
         model = design @ h
         if it < iterations:
@@ -489,7 +506,7 @@ def _backward_selection(columns: Mapping[int, np.ndarray], terms: list[int], tau
     dropped: list[int] = []
     while True:
         design = np.column_stack([columns[a] for a in terms])
-        h, sigma, chi2 = _weighted_nnls(design, var, nu, iterations=3)
+        h, sigma, chi2 = irls_fit(design, var, np.sqrt(2.0 / nu), iterations=3)
         pos = h > 0
         if not pos.any():
             raise DataError("no power-law term fits this curve")

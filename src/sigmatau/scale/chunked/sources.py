@@ -1,8 +1,8 @@
 """The chunked series: :class:`ChunkedSeries`, its sources, and how the statistics reach it.
 
 Sources: ``.npy``, raw binary and HDF5 files, dask arrays and arrays in memory
-(:func:`from_npy` … :func:`open_series`, :func:`as_chunked`); dask arrays are
-registered as streamed records at import (:func:`_adapt_dask`). The validating
+(:func:`from_npy` … :func:`open_series`, :func:`as_chunked`); a dask object
+given to a statistic becomes a streamed record through :func:`adapt_dask`. The validating
 pass and the scaling as read (:func:`_scan`, :func:`_scaled`) and the
 :class:`~sigmatau.core.driver.StreamedSeries` protocol (:func:`_run`,
 :func:`_finish`) live here with the class, since they build and call it and
@@ -19,7 +19,7 @@ from typing import Callable, Optional, Union
 
 import numpy as np
 
-from ...core.driver import Statistic, register_streamed
+from ...core.driver import Statistic
 from ...core.result import StabilityResult
 from ...core.taus import select_m
 from ...core.validate import check_data_type, check_rate, unscale_variance
@@ -356,11 +356,6 @@ def as_chunked(data: object, *, chunk_size: Optional[int] = None, **open_options
     return from_array(data, chunk_size=size)
 
 
-def _is_dask(data: object) -> bool:
-    """A dask object, recognised by its type's module so that dask is never imported for this test."""
-    return type(data).__module__.startswith("dask.")
-
-
 class _DaskRecord:
     """A dask object given to a statistic: opened as a ChunkedSeries only once the statistic has
     accepted chunked data, so a statistic without a streamed form refuses it first, whatever its shape."""
@@ -375,13 +370,11 @@ class _DaskRecord:
         return _finish(result, self.data, data_type, **options)  # type: ignore[arg-type]
 
 
-def _adapt_dask(data: object) -> _DaskRecord:
-    """A dask object as a streamed record (registered with :func:`~sigmatau.core.driver.register_streamed`);
+def adapt_dask(data: object) -> _DaskRecord:
+    """A dask object as a streamed record: what ``sigmatau/__init__`` registers for dask objects with
+    :func:`~sigmatau.core.driver.register_streamed` (this module loads when the first one arrives);
     a dask collection that is not an array gets the one-line error of :func:`as_chunked` when opened."""
     return _DaskRecord(data)
-
-
-register_streamed(_is_dask, _adapt_dask)
 
 
 # ------------------------------------------------------- validation and scaling
