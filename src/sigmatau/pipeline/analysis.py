@@ -39,6 +39,7 @@ import numpy as np
 from ..uncertainty.confidence import ONE_SIGMA
 from ..errors import DataError, ParameterError, SigmaTauError
 from ..core.result import StabilityResult
+from ..stats import FUNCTIONS
 from ..uncertainty.attach import attach
 from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TERMS, json_ready
 
@@ -58,9 +59,8 @@ __all__ = [
 #: deviation, the total deviation and TheoH, each where the record allows).
 DEFAULT_STATISTICS = ("oadev", "mdev", "tdev", "ohdev", "totdev", "theoh")
 
-#: Statistics :func:`analyze_log` can compute.
-STATISTICS = ("stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev",
-              "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms")
+#: Statistics :func:`analyze_log` can compute: every one of :data:`sigmatau.stats.FUNCTIONS`.
+STATISTICS = tuple(FUNCTIONS)
 
 
 Reference = Mapping[str, Mapping[str, "tuple[float, str]"]]
@@ -204,7 +204,6 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
              reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
              theoh: str = "fast") -> ChannelAnalysis:
     from ..imu import model as imu
-    from ..stats import FUNCTIONS
     from ..imu.units import sensor_unit
 
     t0 = time.perf_counter()
