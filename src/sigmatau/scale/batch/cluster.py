@@ -3,6 +3,7 @@ count, and the client to submit through."""
 
 from __future__ import annotations
 
+import logging
 import os
 import re
 import socket
@@ -141,8 +142,10 @@ def _connect(client: Any, scheduler: Optional[str], workers: int) -> tuple[Any, 
         with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}), \
                 warnings.catch_warnings():  # the scheduler's HTTP port: another one is taken when 8787 is
             warnings.filterwarnings("ignore", message="Port .* is already in use")
+            # silence_logs: a worker whose heartbeat meets the scheduler already closing logs a
+            # traceback at ERROR (seen once in CI); batch reports every log's outcome itself.
             cluster = distributed.LocalCluster(n_workers=n, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                               dashboard_address=None)
+                                               dashboard_address=None, silence_logs=logging.CRITICAL)
     except Exception as exc:
         raise ClusterError(f"cannot start a local Dask cluster of {n} workers: {_one_line(exc)}") from None
     # Not the process's default client: batch submits and waits through it explicitly, and a
