@@ -5,6 +5,7 @@ import pytest
 
 import sigmatau
 from sigmatau.analysis import analyze_log, log_from_arrays
+from sigmatau.core.shared import shared_record
 from sigmatau.pipeline.analysis import _tdev_from_mdev
 
 FIELDS = ("var", "dev", "alpha", "alpha_estimate", "edf", "ci_low", "ci_high", "n", "m", "taus")
@@ -71,3 +72,92 @@ def test_cli_theoh_option(tmp_path, capsys):
     code, out, err = run_cli(["stats", str(log), "--data-type", "freq", "--rate", "1", "--stat", "theoh",
                               "--theoh", "quick"], capsys)
     assert code == 2 and "--theoh" in err
+
+
+# --- sigmatau.core.shared: one channel's validation, phase and noise identification, once
+
+
+def _every_statistic(y, data_type, rate):
+    """Every public statistic of y (the main job's path: identified noise type, χ² interval)."""
+    return {name: sigmatau.stats.FUNCTIONS[name](y, rate=rate, data_type=data_type, taus="octave")
+            for name in sigmatau.stats.FUNCTIONS}
+
+
+@pytest.mark.parametrize("data_type", ["freq", "phase"])
+@pytest.mark.parametrize("alpha", [2, 0, -2])
+def test_statistics_in_a_shared_scope_are_bit_for_bit_those_outside(alpha, data_type):
+    y = sigmatau.power_law_noise(3000, alpha=alpha, rng=alpha + 10) * 3e-3 + 0.25
+    alone = _every_statistic(y, data_type, 50.0)
+    with shared_record(y):
+        together = _every_statistic(y, data_type, 50.0)
+        again = _every_statistic(y, data_type, 50.0)  # from the scope's memo
+    for name in alone:
+        _assert_same(together[name], alone[name])
+        _assert_same(again[name], alone[name])
+
+
+def test_integer_data_beyond_2_53_keep_their_two_forms_apart():
+    # remove_offset=True takes these exactly relative to the first value; False rounds each: both
+    # forms live in the scope under their own keys.
+    y = (np.arange(2000, dtype=np.int64) * 7 + (1 << 60)) + np.random.default_rng(3).integers(-50, 50, 2000)
+    alone = {n: sigmatau.stats.FUNCTIONS[n](y, data_type="phase") for n in ("oadev", "mdev", "theoh", "totdev")}
+    with shared_record(y):
+        for n, res in alone.items():
+            _assert_same(sigmatau.stats.FUNCTIONS[n](y, data_type="phase"), res)
+
+
+def test_the_scope_shares_the_lag1_autocorrelations(monkeypatch):
+    from sigmatau.uncertainty import lag1
+
+    calls = []
+    real = lag1._lag1_r1
+    monkeypatch.setattr(lag1, "_lag1_r1", lambda z, acf="standard": calls.append(z.size) or real(z, acf))
+    y = sigmatau.power_law_noise(20_000, alpha=0, rng=5)
+    sigmatau.oadev(y)
+    once = len(calls)
+    assert once > 0
+    calls.clear()
+    with shared_record(y):
+        for name in ("oadev", "mdev", "totdev", "ohdev"):
+            sigmatau.stats.FUNCTIONS[name](y)
+    # White FM stops at d = 0 at every factor: the four statistics ask at the same octave factors,
+    # so the scope computes each r1 once (without it: four times as many).
+    assert len(calls) == once
+    calls.clear()
+    for name in ("oadev", "mdev", "totdev", "ohdev"):
+        sigmatau.stats.FUNCTIONS[name](y)
+    assert len(calls) >= 4 * once - 4
+
+
+def test_the_scope_leaves_the_callers_array_alone_and_hands_out_read_only_copies():
+    from sigmatau.core.driver import validated_samples
+
+    y = sigmatau.power_law_noise(1000, alpha=0, rng=2) * 1e-2
+    before = y.copy()
+    with shared_record(y):
+        series, k = validated_samples(y, remove_offset=False)
+        assert series is validated_samples(y, remove_offset=True)[0]  # float data: one copy for both
+        assert not series.flags.writeable and y.flags.writeable
+        with pytest.warns(sigmatau.imu.ImuWarning, match="not resolved"):  # 10 s of white noise: no K
+            sigmatau.imu.analyze(y, rate=100.0, unit="rad/s")
+        sigmatau.theoh(y, rate=100.0)
+    np.testing.assert_array_equal(y, before)
+    assert y.flags.writeable
+    other, _ = validated_samples(y, remove_offset=False)  # scope closed: a fresh, writeable copy
+    assert other is not series and other.flags.writeable
+
+
+def test_scopes_belong_to_their_thread():
+    import threading
+
+    from sigmatau.core.driver import validated_samples
+
+    y = np.linspace(0.0, 1.0, 100)
+    seen = {}
+    with shared_record(y):
+        mine = validated_samples(y, remove_offset=False)[0]
+        t = threading.Thread(target=lambda: seen.setdefault("other", validated_samples(y, remove_offset=False)[0]))
+        t.start()
+        t.join()
+        assert validated_samples(y, remove_offset=False)[0] is mine
+    assert seen["other"] is not mine and seen["other"].flags.writeable

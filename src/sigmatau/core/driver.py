@@ -21,11 +21,12 @@ from .validate import (
 )
 from ..errors import DataError, ParameterError
 from .result import StabilityResult
+from .shared import derived
 from .taus import select_m
 
 __all__ = [
     "Statistic", "ScaledPhase", "StreamedSeries", "compute", "is_streamed", "prepare", "prepare_scaled",
-    "register_streamed", "streamed",
+    "register_streamed", "streamed", "validated_samples",
 ]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
@@ -146,7 +147,7 @@ def _validated(stat: Statistic, data: object, rate: object, data_type: object) -
     """
     rate_f = check_rate(rate)
     dtype = check_data_type(data_type)
-    series, k = scale_to_unit(as_series(data, remove_offset=_offset_free(stat, dtype)))
+    series, k = validated_samples(data, remove_offset=_offset_free(stat, dtype))
     n_points = series.size if dtype == "phase" else series.size + 1
     if n_points < stat.min_points:
         kind = "phase" if dtype == "phase" else "frequency"
@@ -155,8 +156,26 @@ def _validated(stat: Statistic, data: object, rate: object, data_type: object) -
     return series, rate_f, dtype, n_points, k
 
 
+def validated_samples(data: object, *, remove_offset: bool) -> tuple[np.ndarray, int]:
+    """``scale_to_unit(as_series(data, remove_offset=...))``: the samples every kernel sees, and k.
+
+    Computed once per :func:`~sigmatau.core.shared.shared_record` scope for the
+    scope's record (the main job's channel); ``remove_offset`` changes the samples
+    only for integer data, so float data share one copy whatever it is.
+    """
+    differs = remove_offset and not (isinstance(data, np.ndarray) and not np.issubdtype(data.dtype, np.integer))
+    return derived(data, ("validated", differs),
+                   lambda: scale_to_unit(as_series(data, remove_offset=remove_offset)))
+
+
 def _phase_of(stat: Statistic, series: np.ndarray, rate: float, dtype: str) -> np.ndarray:
-    if not stat.trend_invariant:
+    # Shared by the statistics of a record (TOTDEV and TheoH both integrate the same samples).
+    return derived(series, ("phase", stat.trend_invariant, rate, dtype),
+                   lambda: _phase_from(stat.trend_invariant, series, rate, dtype))
+
+
+def _phase_from(trend_invariant: bool, series: np.ndarray, rate: float, dtype: str) -> np.ndarray:
+    if not trend_invariant:
         return to_phase(series, rate, dtype)
     if dtype == "freq":
         return to_phase(series - series.mean(), rate, dtype)

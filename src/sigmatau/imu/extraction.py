@@ -322,7 +322,9 @@ def _curve_of_samples(samples: Any, *, rate: Optional[float], unit: str, scale: 
     sc = float(scale)
     if not (math.isfinite(sc) and sc > 0):
         raise ParameterError(f"scale={scale!r} must be a positive number")
-    y = as_series(samples, "samples") * sc
+    y = as_series(samples, "samples")
+    if sc != 1.0:  # at scale 1 the caller's own array goes on (read, never written), shared with the
+        y = y * sc  # other statistics of its channel (sigmatau.core.shared)
     if increments:
         y = y * rate_f
     n_samples = int(y.size)

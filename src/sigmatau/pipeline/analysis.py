@@ -39,6 +39,7 @@ import numpy as np
 from ..uncertainty.confidence import ONE_SIGMA
 from ..errors import DataError, ParameterError, SigmaTauError
 from ..core.result import StabilityResult
+from ..core.shared import shared_record
 from ..stats import FUNCTIONS
 from ..uncertainty.attach import attach
 from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TERMS, json_ready
@@ -436,7 +437,10 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
     from ..imu.model import ImuWarning
 
     def one(name: str) -> ChannelAnalysis:
-        ch = _channel(log, name, stats, taus, confidence, reference, model, theoh)
+        # The statistics and the model of a channel share its validated samples, phase and
+        # noise identification (computed once instead of once per statistic).
+        with shared_record(log[name]):
+            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch

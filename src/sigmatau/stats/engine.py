@@ -14,9 +14,9 @@ from typing import Optional
 
 import numpy as np
 
-from ..core.driver import Statistic, compute, streamed
+from ..core.driver import Statistic, compute, streamed, validated_samples
 from ..core.result import StabilityResult
-from ..core.validate import as_series, scale_to_unit, unscale_variance
+from ..core.validate import unscale_variance
 from ..uncertainty.attach import attach, check_options
 from ..uncertainty.confidence import ONE_SIGMA
 
@@ -85,6 +85,6 @@ def finish(result: StabilityResult, data: object, data_type: str, *, alpha: obje
     # The variance was computed by the caller's kernel: refuse one float64 could not hold.
     unscale_variance(result.var, 0, result.statistic)
     # Scale-invariant noise identification on the scaled samples (no overflow at 1e±300).
-    given, _ = scale_to_unit(as_series(data, remove_offset=True))
+    given, _ = validated_samples(data, remove_offset=True)
     return attach(result, given, data_type, alpha=alpha_i, confidence=conf, ci=ci_m,
                   id_factors=None if identified is not None else result.m, identified=identified)

@@ -6,11 +6,12 @@ Public through :mod:`sigmatau.uncertainty.noiseid` (and :mod:`sigmatau.noiseid`)
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Callable, Literal
 
 import numpy as np
 
 from ..core.numeric import block_means, dot, sumsq
+from ..core.shared import memoized
 from ..core.validate import as_series, check_data_type
 from ..errors import DataError, ParameterError
 from .noisebase import InsufficientDataError, _check_d, _check_m
@@ -159,12 +160,43 @@ def lag1_acf_noise_id(
         raise ParameterError(f"acf={acf!r} must be 'standard' or 'stable32'")
     if min_points < 3:
         raise ParameterError(f"min_points={min_points!r} must be at least 3")
-    z = _analysis_series(series, dtype, m, detrend, min_points)
-    theta = 1 if dtype == "phase" else 0
-    d, delta, r1 = _difference_until_white(z, m, dmin, dmax, acf)
+    return lag1_of_series(series, m, data_type=dtype, dmin=dmin, dmax=dmax, detrend=detrend, acf=acf,
+                          min_points=min_points)
+
+
+def lag1_of_series(series: np.ndarray, m: int, *, data_type: str, dmin: int, dmax: int, detrend: bool,
+                   acf: str, min_points: int) -> Lag1Result:
+    """:func:`lag1_acf_noise_id` on a series and options already validated.
+
+    Inside :func:`sigmatau.core.shared.shared_record` the lag-1 autocorrelation
+    at each (m, d) is computed once and reused by every statistic of the record
+    (the Allan and Hadamard families differ only in how many differences they
+    may take), with the same arithmetic, so the result is unchanged.
+    """
+    n = series.size // m if data_type == "freq" else (series.size + m - 1) // m
+    if n < min_points:
+        raise InsufficientDataError(
+            f"lag-1 noise identification needs at least {min_points} points at m={m},"
+            f" got {n} from {series.size} {data_type} samples"
+        )
+    levels: dict[int, np.ndarray] = {}
+
+    def z_at(d: int) -> np.ndarray:
+        # The analysis series differenced d times, made only when an r1 is not yet known.
+        if d not in levels:
+            levels[d] = _analysis_series(series, data_type, m, detrend, min_points) if d == 0 else np.diff(z_at(d - 1))
+            levels.pop(d - 2, None)  # keep at most two levels alive
+        return levels[d]
+
+    def r1_at(d: int) -> float:
+        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
+                        lambda: _lag1_r1(z_at(d), acf))
+
+    theta = 1 if data_type == "phase" else 0
+    d, delta, r1 = _difference_until_white(r1_at, m, dmin, dmax)
     alpha_est = -2.0 * (delta + d) + 2 * theta
     alpha = -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta
-    return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(z.size))
+    return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(n))
 
 
 def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_points: int) -> np.ndarray:
@@ -187,8 +219,10 @@ def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_
     return z
 
 
-def _difference_until_white(z: np.ndarray, m: int, dmin: int, dmax: int, acf: str) -> tuple[int, float, float]:
-    """Difference ``z`` until δ = r1/(1 + r1) < 0.25 (within ``dmin``…``dmax``).
+def _difference_until_white(r1_at: Callable[[int], float], m: int, dmin: int, dmax: int) -> tuple[int, float, float]:
+    """Difference the series until δ = r1/(1 + r1) < 0.25 (within ``dmin``…``dmax``).
+
+    ``r1_at(d)`` is the lag-1 autocorrelation of the series differenced d times.
 
     Returns
     -------
@@ -199,11 +233,10 @@ def _difference_until_white(z: np.ndarray, m: int, dmin: int, dmax: int, acf: st
     """
     d = 0
     while True:
-        r1 = _lag1_r1(z, acf)
+        r1 = r1_at(d)
         if r1 <= -1.0:
             raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
         delta = r1 / (1.0 + r1)
         if d >= dmin and (delta < 0.25 or d >= dmax):
             return d, delta, r1
-        z = np.diff(z)
         d += 1

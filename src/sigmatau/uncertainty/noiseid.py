@@ -32,7 +32,7 @@ import numpy as np
 from ..core.taus import STOP_RATIOS
 from ..core.validate import as_series, check_data_type, check_rate
 from ..errors import DataError, ParameterError
-from .lag1 import LAG1_MIN_POINTS, Lag1Result, lag1_acf_noise_id
+from .lag1 import LAG1_MIN_POINTS, Lag1Result, lag1_acf_noise_id, lag1_of_series
 from .noisebase import NOISE_NAMES, Family, InsufficientDataError, _check_count, _check_m
 # Public names outside __all__ that other modules import from here (the chunked
 # driver: b1_classify, b1_observed; imu.model: OCTAVE_CORRELATION).
@@ -227,6 +227,8 @@ def identify(
     n_freq = series.size - 1 if dtype == "phase" else series.size
     min_averages = b1_min_averages(str(family).lower())
     terms = _check_terms(n_terms, len(m_list))
+    if acf not in ("standard", "stable32"):
+        raise ParameterError(f"acf={acf!r} must be 'standard' or 'stable32'")
 
     alpha = np.zeros(len(m_list), dtype=np.int64)
     est = np.full(len(m_list), np.nan)
@@ -273,7 +275,9 @@ def _lag1_at(series: np.ndarray, m: int, dtype: str, dmax: int, detrend: bool,
     if series.size // m < LAG1_MIN_POINTS:
         return None
     try:
-        r = lag1_acf_noise_id(series, m, data_type=dtype, dmax=dmax, detrend=detrend, acf=acf)
+        # The series is validated once by identify (not again at every m).
+        r = lag1_of_series(series, m, data_type=dtype, dmin=0, dmax=dmax, detrend=detrend, acf=acf,
+                           min_points=LAG1_MIN_POINTS)
     except InsufficientDataError:
         return None
     return r.alpha, r.alpha_estimate, "lag1"
