@@ -146,3 +146,35 @@ def test_timestamps_out_of_order_duplicated_and_missing():
     json.dumps(c.to_dict())
     with pytest.raises(ParameterError):
         check_timestamps([1.0, 1.0, 1.0])
+
+
+@pytest.mark.parametrize("n, nperseg", [(256, 32), (1000, 64), (4097, 512), (100_003, 4096), (70_000, 255)])
+def test_welch_density_is_scipys_welch(n, nperseg, monkeypatch):
+    from scipy.signal import welch
+
+    from sigmatau.imu import checks as checks_module
+
+    monkeypatch.setattr(checks_module, "_WELCH_BATCH", 3 * nperseg)  # several batches, a short last one
+    x = np.cumsum(np.random.default_rng(n).standard_normal(n)) * 1e-3 + 7.0
+    f0, p0 = welch(x - x.mean(), fs=250.0, nperseg=nperseg, detrend="constant")
+    f1, p1 = checks_module.welch_density(x, 250.0, nperseg)
+    np.testing.assert_array_equal(f1, f0)
+    np.testing.assert_allclose(p1, p0, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("levels", [2, 3, 50, 10**9])
+def test_repeat_runs_match_a_plain_scan(levels, rng):
+    from sigmatau.imu.checks import _repeat_runs
+
+    for n in (1, 2, 3, 10, 997):
+        x = rng.integers(0, levels, n).astype(float)
+        runs, i = [], 0
+        while i < n:  # the plain definition: maximal stretches of equal neighbours
+            j = i
+            while j + 1 < n and x[j + 1] == x[i]:
+                j += 1
+            if j > i:
+                runs.append((i, j - i + 1))
+            i = j + 1
+        starts, lengths = _repeat_runs(x[1:] == x[:-1])
+        assert list(zip(starts.tolist(), lengths.tolist())) == runs
