@@ -161,3 +161,18 @@ def test_scopes_belong_to_their_thread():
         t.join()
         assert validated_samples(y, remove_offset=False)[0] is mine
     assert seen["other"] is not mine and seen["other"].flags.writeable
+
+
+def test_the_main_job_equals_each_statistic_called_alone():
+    from sigmatau.imu import simulate
+
+    gx = simulate("euroc-gyro", duration=300.0, rng=11)
+    log = log_from_arrays({"gyro_x": gx}, rate=200.0, units={"gyro_x": "rad/s"})
+    ch = analyze_log(log, workers=1).channel("gyro_x")
+    model = sigmatau.imu.analyze(gx, rate=200.0, unit="rad/s")
+    assert set(ch.results) == {"oadev", "mdev", "tdev", "ohdev", "totdev", "theoh"}
+    for name, res in ch.results.items():
+        extra = {"method": "fast"} if name == "theoh" else {}
+        _assert_same(res, sigmatau.stats.FUNCTIONS[name](gx, rate=200.0, taus="octave", **extra))
+    for term in ("N", "B", "K"):
+        assert getattr(ch.model, term) == getattr(model, term)

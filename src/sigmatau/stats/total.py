@@ -4,7 +4,9 @@ The total variances extend the data beyond both ends by reflection before
 differencing, so long averaging times use every sample and get more degrees of
 freedom than the plain estimators at the same τ.
 
-* TOTVAR reflects the whole phase record once; O(N) per τ.
+* TOTVAR reflects the phase record at both ends; O(N) per τ. The kernel reads
+  reflected values only for the edge terms and streams the interior from the
+  record in chunks, so it never holds the 3N-point extension.
 * MTOT, TTOT and HTOT detrend and reflect every 3m-point subsequence
   separately. The direct kernel (:func:`~sigmatau.stats.total_sums.tot_sums`) costs O(N·m) per τ:
   inside each subsequence the m-averages of the 9m-point extension come from
@@ -34,7 +36,7 @@ import numpy as np
 from ..core.driver import Statistic
 from ..core.taus import STOP_RATIOS
 from .engine import finish, run
-from ..core.numeric import sumsq
+from ..core.numeric import CHUNK
 from ..uncertainty.attach import CiMethod, check_options
 from ..uncertainty.confidence import ONE_SIGMA
 from ..core.validate import DataType
@@ -81,17 +83,124 @@ def _doc_total(func):
 
 
 def _totvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray]:
+    """TOTVAR at each factor of ``ms`` from the phase ``x``, without building the extension.
+
+    The sum over i = 1 … N-2 of ``(x*_{i-m} - 2x*_i + x*_{i+m})²`` reads the
+    reflected series x* only where i-m < 0 or i+m > N-1, at most m-1 terms at
+    each end (every term once 2m > N-1). The interior terms read ``x`` itself through three shifted views;
+    only the edge blocks materialise reflected values, chunk by chunk, so the
+    memory beyond ``x`` is a few :data:`~sigmatau.core.numeric.CHUNK`-sized
+    buffers whatever N and m (a 3N-point extension and three N-sized
+    temporaries per τ cost more in page faults than the arithmetic). Each term
+    is formed by the same operations, in the same order, as the numpy
+    expression ``a - 2.0*b + c`` on the extension, so every term is
+    bit-identical to that construction; only the order in which the squares are
+    summed differs.
+    """
     n_pts = x.size
-    # Doubly reflected phase x*_{-j} = 2x_0 - x_j, x*_{N-1+j} = 2x_{N-1} - x_{N-1-j},
-    # j = 1 … N-2; x*_i sits at index i + N - 2 of ``ext``.
-    inner = x[n_pts - 2 : 0 : -1]
-    ext = np.concatenate((2.0 * x[0] - inner, x, 2.0 * x[-1] - inner))
-    c = n_pts - 2
+    bufs = _TotvarBuffers(min(CHUNK, max(n_pts - 2, 1)))
     var = np.empty(ms.size)
     for i, m in enumerate(ms):
-        d2 = ext[c + 1 - m : c + n_pts - 1 - m] - 2.0 * ext[c + 1 : c + n_pts - 1] + ext[c + 1 + m : c + n_pts - 1 + m]
-        var[i] = sumsq(d2) / (2.0 * (m * tau0) ** 2 * d2.size)
+        var[i] = _totvar_sum(x, int(m), bufs) / (2.0 * (m * tau0) ** 2 * (n_pts - 2))
     return var, np.full(ms.size, n_pts - 2, dtype=np.int64)
+
+
+class _TotvarBuffers:
+    """Scratch arrays of one :func:`_totvar_kernel` call, reused across factors and chunks.
+
+    ``work`` holds the second differences of one chunk; ``left`` and ``right``
+    hold the reflected operands ``x*_{i-m}`` and ``x*_{i+m}`` of an edge chunk
+    (both may be needed at once when 2m > N, where one chunk spans both ends).
+    """
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.work = np.empty(size)
+        self.left = np.empty(size)
+        self.right = np.empty(size)
+
+
+def _totvar_sum(x: np.ndarray, m: int, bufs: _TotvarBuffers) -> float:
+    """``Σ_{i=1}^{N-2} (x*_{i-m} - 2x*_i + x*_{i+m})²`` for one factor ``m`` (1 ≤ m ≤ N-1).
+
+    The i range splits into ``[1, a)`` (i < m: the left operand is reflected),
+    the interior ``[a, b)`` (m ≤ i ≤ N-1-m: all three operands are samples of
+    ``x``) and ``[b, N-1)`` (the right operand is reflected, and for 2m > N-1
+    possibly the left one too). With ``a = min(m, N-1)`` and
+    ``b = max(N-m, a)`` the interior is empty exactly when no i satisfies both
+    bounds, and the edge ranges then cover every term.
+    """
+    n_pts = x.size
+    a = min(max(1, m), n_pts - 1)
+    b = max(min(n_pts - 1, n_pts - m), a)
+    total = _d2_sumsq(x[a - m : b - m], x[a:b], x[a + m : b + m], bufs) if b > a else 0.0
+    total += _edge_sumsq(x, m, 1, a, bufs)
+    total += _edge_sumsq(x, m, b, n_pts - 1, bufs)
+    return total
+
+
+def _edge_sumsq(x: np.ndarray, m: int, lo: int, hi: int, bufs: _TotvarBuffers) -> float:
+    """The terms i = lo … hi-1 whose operands may fall outside ``x``, one chunk at a time."""
+    total = 0.0
+    for start in range(lo, hi, bufs.size):
+        stop = min(start + bufs.size, hi)
+        left = _xstar(x, start - m, stop - m, bufs.left)
+        right = _xstar(x, start + m, stop + m, bufs.right)
+        total += _d2_sumsq(left, x[start:stop], right, bufs)
+    return total
+
+
+def _xstar(x: np.ndarray, j0: int, j1: int, out: np.ndarray) -> np.ndarray:
+    """The doubly reflected values ``x*_j``, j = j0 … j1-1 (``-(N-2) ≤ j0``, ``j1 ≤ 2N-2``).
+
+    A view of ``x`` when the range lies inside the record (no copy), else the
+    values are written to ``out``. Reflected values are computed as
+    ``2.0*x[0] - x[k]`` and ``2.0*x[-1] - x[k]``, the very operations the
+    extension was built with, so they carry the same bits.
+    """
+    n_pts = x.size
+    if 0 <= j0 and j1 <= n_pts:
+        return x[j0:j1]
+    res = out[: j1 - j0]
+    pos = 0
+    if j0 < 0:  # x*_j = 2x_0 - x_{-j}, j = j0 … min(j1, 0)-1
+        k = min(j1, 0) - j0
+        np.subtract(2.0 * x[0], x[-j0 - k + 1 : -j0 + 1][::-1], out=res[:k])
+        pos = k
+    mid_lo, mid_hi = max(j0, 0), min(j1, n_pts)
+    if mid_hi > mid_lo:
+        res[pos : pos + mid_hi - mid_lo] = x[mid_lo:mid_hi]
+        pos += mid_hi - mid_lo
+    if j1 > n_pts:  # x*_j = 2x_{N-1} - x_{2N-2-j}, j = max(j0, N) … j1-1
+        first = max(j0, n_pts)
+        k = j1 - first
+        top = 2 * n_pts - 2 - first  # index in x of the first value, counting down
+        np.subtract(2.0 * x[-1], x[top - k + 1 : top + 1][::-1], out=res[pos : pos + k])
+    return res
+
+
+def _d2_sumsq(left: np.ndarray, mid: np.ndarray, right: np.ndarray, bufs: _TotvarBuffers) -> float:
+    """``Σ (left - 2.0*mid + right)²``, chunked, each term rounded as that numpy expression.
+
+    Three in-place passes and a sum of squares per chunk: ``w = 2.0*mid``,
+    ``w = left - w``, ``w = w + right``. This is numpy's own evaluation order
+    of ``left - 2.0*mid + right`` (so each term is bit-identical to the
+    extension-based code), and one pass fewer than
+    :func:`~sigmatau.core.numeric.sumsq_combination`, which first copies
+    ``left`` and then adds ``-2.0*mid``. ``einsum`` rather than ``np.dot``:
+    see :func:`~sigmatau.core.numeric.sumsq`.
+    """
+    n = mid.size
+    size = bufs.size
+    total = 0.0
+    for lo in range(0, n, size):
+        hi = min(lo + size, n)
+        w = bufs.work[: hi - lo]
+        np.multiply(mid[lo:hi], 2.0, out=w)
+        np.subtract(left[lo:hi], w, out=w)
+        np.add(w, right[lo:hi], out=w)
+        total += float(np.einsum("i,i->", w, w))
+    return total
 
 
 def _mtot_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray]:
