@@ -47,6 +47,67 @@ class _Console:
             _say(f"  {text}", err=True, flush=True)
 
 
+class _StepDisplay:
+    """The analysis's progress on a terminal: one tqdm bar with the steps running and the time left.
+
+    Fed with :class:`sigmatau.analysis.StepEvent` from the worker threads. Drawn only on a
+    terminal, without ``--quiet`` and with tqdm installed (the ``progress`` extra, part of
+    ``plot`` and ``all``); otherwise the console prints a line per channel as before. The time
+    left is tqdm's, in units of :data:`sigmatau.analysis.STEP_COST` (measured seconds per step).
+    """
+
+    #: Seconds between redraws (tqdm's ``mininterval``).
+    MININTERVAL = 0.5
+
+    def __init__(self, console: _Console) -> None:
+        import threading
+
+        self.console = console
+        self.lock = threading.Lock()
+        self.running: dict[tuple[str, str], None] = {}
+        self.bar: Any = None
+        self.enabled = False
+        if not console.quiet and console.tty:
+            try:
+                import tqdm  # noqa: F401  (only whether it is installed)
+            except ImportError:
+                pass
+            else:
+                self.enabled = True
+
+    def event(self, ev: Any) -> None:
+        if not self.enabled:
+            return
+        with self.lock:
+            if self.bar is None:
+                from tqdm import tqdm
+
+                self.bar = tqdm(total=ev.total, file=sys.stderr, leave=False, mininterval=self.MININTERVAL,
+                                dynamic_ncols=True,
+                                bar_format="analysing {percentage:3.0f}%|{bar:20}| {elapsed} elapsed,"
+                                           " ≈{remaining} left · {postfix}")
+            if ev.done:
+                self.running.pop((ev.channel, ev.step), None)
+                self.bar.update(ev.weight)
+            else:
+                self.running[(ev.channel, ev.step)] = None
+            now = ", ".join(f"{c}: {'IMU model' if s == 'model' else s}" for c, s in self.running)
+            self.bar.set_postfix_str(printable(now), refresh=False)
+
+    def line(self, text: str) -> None:
+        """A line per finished channel: above the bar when it is drawn."""
+        if self.bar is not None:
+            with self.lock:
+                self.bar.write(printable(f"  {text}"), file=sys.stderr)
+        else:
+            self.console.progress(text)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
 def _say(text: str, *, err: bool = False, multiline: bool = False, flush: bool = False) -> None:
     """Print one message (stdout, or stderr with ``err``) with its control characters escaped.
 
@@ -287,10 +348,14 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
     from ..pipeline.analysis import analyze_log
     from ..report.outputs import write_outputs
 
-    analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
-                           model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
-                           rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
-                           progress=console.progress, theoh=args.theoh)
+    display = _StepDisplay(console)
+    try:
+        analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
+                               model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
+                               rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
+                               progress=display.line, theoh=args.theoh, on_step=display.event)
+    finally:
+        display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]
     files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
                           report=not args.no_report, protect=protect)

@@ -6,6 +6,8 @@ the Allan-family kernels shared with noise identification (``kernels``), the
 expected variance of each power-law noise (``powerlaw``), the result type
 (``result``) and the raw computation of one statistic together with the
 :class:`~sigmatau.core.driver.StreamedSeries` protocol through which records
-computed piecewise reach it (``driver``). May import: nothing of sigmatau but
+computed piecewise reach it (``driver``), and the scope in which the statistics
+of one record share its validated samples, phase and noise identification
+(``shared``). May import: nothing of sigmatau but
 :mod:`sigmatau.errors`.
 """

@@ -47,7 +47,9 @@ from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TE
 __all__ = [
     "DEFAULT_STATISTICS",
     "STATISTICS",
+    "STEP_COST",
     "ChannelAnalysis",
+    "StepEvent",
     "LogAnalysis",
     "analyze_log",
     "log_from_arrays",
@@ -65,6 +67,36 @@ STATISTICS = tuple(FUNCTIONS)
 
 
 Reference = Mapping[str, Mapping[str, "tuple[float, str]"]]
+
+#: Relative cost of each step of a channel, for the time left of a progress display: seconds per
+#: step on one 21.6-million-sample channel of bench/main_job.py (the IMU model includes its OADEV
+#: and data checks; TDEV is derived from MDEV). A statistic not listed counts as 2.
+STEP_COST = {"model": 4.5, "oadev": 2.0, "mdev": 3.0, "tdev": 0.05, "ohdev": 2.3, "totdev": 1.8, "theoh": 2.1}
+
+
+@dataclasses.dataclass(frozen=True)
+class StepEvent:
+    """One step of :func:`analyze_log` starting or ending, for a progress display.
+
+    Attributes
+    ----------
+    channel : str
+        The channel.
+    step : str
+        ``"model"`` (the IMU noise model) or a statistic name.
+    done : bool
+        False when the step starts, True when it has ended (computed or skipped).
+    weight : float
+        The step's estimated share of the job (:data:`STEP_COST`).
+    total : float
+        The sum of the weights of every step of the job.
+    """
+
+    channel: str
+    step: str
+    done: bool
+    weight: float
+    total: float
 
 
 # ----------------------------------------------------------------------- helpers
@@ -201,9 +233,13 @@ def check_statistics(statistics: Sequence[str]) -> tuple[str, ...]:
     return tuple(out)
 
 
+def _no_step(step: str, done: bool) -> None:
+    """The step callback when nobody watches."""
+
+
 def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
              reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
-             theoh: str = "fast") -> ChannelAnalysis:
+             theoh: str = "fast", step: Callable[[str, bool], None] = _no_step) -> ChannelAnalysis:
     from ..imu import model as imu
     from ..imu.units import sensor_unit
 
@@ -214,6 +250,7 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
     model = None
     note = ""
     if model_wanted and group in IMU_GROUPS:
+        step("model", False)
         try:
             su = sensor_unit(unit)
         except SigmaTauError:
@@ -231,31 +268,55 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
                 # The fit's linear algebra fails on data far from unit scale (an SVD that does
                 # not converge at 1e-100): the statistics stand, the model is skipped with why.
                 note = f"IMU model not fitted: numerical failure in the fit ({type(exc).__name__}: {exc})"
+        step("model", True)
     elif model_wanted:
         note = f"{group} channel: the IMU model applies to gyro and accel channels"
     results: dict[str, StabilityResult] = {}
     skipped: dict[str, str] = {}
     for stat in statistics:
-        if stat == "oadev" and model is not None:
-            results[stat] = model.result  # the very curve the model was fitted on
-            continue
-        if stat == "tdev" and "mdev" in results:
-            derived = _tdev_from_mdev(results["mdev"])  # TVAR = τ²/3·MVAR: no second pass over the record
-            if derived is not None:
-                results[stat] = derived
-                continue
-        extra = {"method": theoh} if stat == "theoh" else {}
-        try:
-            results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
-                                            confidence=confidence, **extra)
-        except DataError as exc:
-            skipped[stat] = str(exc)
+        step(stat, False)
+        _statistic(stat, x, log, taus, confidence, theoh, model, results, skipped)
+        step(stat, True)
     rows: tuple[dict, ...] = ()
     if model is not None and reference.get(group):
         rows = tuple(model.compare(reference[group]))
     return ChannelAnalysis(name=name, group=group, unit=unit, n_samples=int(x.size), results=results,
                            skipped=skipped, model=model, model_note=note, datasheet=rows,
                            seconds=time.perf_counter() - t0)
+
+
+def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float, theoh: str, model: Any,
+               results: dict[str, StabilityResult], skipped: dict[str, str]) -> None:
+    """Compute one statistic of a channel into ``results`` (or its reason into ``skipped``)."""
+    if stat == "oadev" and model is not None:
+        results[stat] = model.result  # the very curve the model was fitted on
+        return
+    if stat == "tdev" and "mdev" in results:
+        derived = _tdev_from_mdev(results["mdev"])  # TVAR = τ²/3·MVAR: no second pass over the record
+        if derived is not None:
+            results[stat] = derived
+            return
+    extra = {"method": theoh} if stat == "theoh" else {}
+    try:
+        results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
+                                        confidence=confidence, **extra)
+    except DataError as exc:
+        skipped[stat] = str(exc)
+
+
+def _plan(log: Any, names: Sequence[str], stats: tuple[str, ...], model: bool) -> dict[tuple[str, str], float]:
+    """Every (channel, step) of the job with its estimated cost (:data:`STEP_COST`)."""
+    plan: dict[tuple[str, str], float] = {}
+    for name in names:
+        with_model = model and log.group_of(name) in IMU_GROUPS
+        if with_model:
+            plan[(name, "model")] = STEP_COST["model"]
+        for stat in stats:
+            cost = STEP_COST.get(stat, 2.0)
+            if (stat == "oadev" and with_model) or (stat == "tdev" and "mdev" in stats[:stats.index(stat)]):
+                cost = 0.05  # taken from the model's curve / derived from MDEV
+            plan[(name, stat)] = cost
+    return plan
 
 
 def _tdev_from_mdev(mdev_result: StabilityResult) -> Optional[StabilityResult]:
@@ -321,6 +382,7 @@ def analyze_log(
     workers: Optional[int] = None,
     progress: Optional[Callable[[str], None]] = None,
     theoh: str = "fast",
+    on_step: Optional[Callable[[StepEvent], None]] = None,
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -354,6 +416,11 @@ def analyze_log(
         Channels analysed at once (threads; default the usable cores).
     progress : callable, optional
         Called with a line of text as each channel finishes.
+    on_step : callable, optional
+        Called with a :class:`StepEvent` as each step of each channel (the IMU
+        model, each statistic) starts and ends, from the worker threads; for
+        a progress display with the time left (``sigmatau analyze`` draws one
+        on a terminal). It must return quickly.
     theoh : {"fast", "exact"}
         How TheoH's TheoBR rows are computed (:func:`sigmatau.theoh` ``method``):
         ``"fast"`` (default) uses Fast TheoBR on block averages above 65,536
@@ -384,7 +451,7 @@ def analyze_log(
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names))
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
-                                   theoh)
+                                   theoh, on_step)
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
@@ -432,15 +499,23 @@ def _worker_count(workers: Optional[int], n_channels: int) -> int:
 def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: Any, confidence: float,
                       reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
                       progress: Optional[Callable[[str], None]],
-                      theoh: str = "fast") -> tuple[list[ChannelAnalysis], list[str]]:
+                      theoh: str = "fast", on_step: Optional[Callable[[StepEvent], None]] = None,
+                      ) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
     from ..imu.model import ImuWarning
 
+    plan = _plan(log, names, stats, model) if on_step is not None else {}
+    total = sum(plan.values())
+
     def one(name: str) -> ChannelAnalysis:
+        def step(what: str, finished: bool) -> None:
+            if on_step is not None:
+                on_step(StepEvent(name, what, finished, plan.get((name, what), 0.0), total))
+
         # The statistics and the model of a channel share its validated samples, phase and
         # noise identification (computed once instead of once per statistic).
         with shared_record(log[name]):
-            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh)
+            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch
