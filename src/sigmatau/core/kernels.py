@@ -133,14 +133,32 @@ def block_sums_by_factor(y: np.ndarray, ms: np.ndarray):
         yield i, m, sums
 
 
-def window_sums_by_factor(y: np.ndarray, ms: np.ndarray, *, double: bool = False):
+def window_sums_by_factor(y: np.ndarray, ms: np.ndarray, *, double: bool = False, b_only: bool = False):
     """Yield ``(index, m, ws)`` over ``ms`` in increasing order, ``ws`` a
-    :class:`~sigmatau.core.numeric.WindowSums` advanced to m (its arrays are valid until the next step)."""
+    :class:`~sigmatau.core.numeric.WindowSums` advanced to m (its arrays are valid until the next step).
+
+    ``b_only`` (with ``double``): the caller reads only the double sums B, so A is freed as soon
+    as every factor left is this one times a power of two and m ≥ 4 — from there
+    :meth:`~sigmatau.core.numeric.WindowSums.advance` only doubles, with the very operations it
+    would use with A kept (a record-sized array less at the peak of MVAR on an octave grid).
+    """
     ws = WindowSums(y, double=double)
-    for i in np.argsort(ms, kind="stable"):
+    order = np.argsort(ms, kind="stable")
+    for pos, i in enumerate(order):
         m = int(ms[i])
         ws.advance(m)
+        if b_only and double and m >= 4 and _doublings_only(m, ms[order[pos + 1:]]):
+            ws.release_a()
         yield i, m, ws
+
+
+def _doublings_only(m: int, later: np.ndarray) -> bool:
+    """Every later factor is m times a power of two (2, 4, …) or m itself."""
+    for v in later.tolist():
+        q, r = divmod(int(v), m)
+        if r or q & (q - 1):
+            return False
+    return True
 
 
 def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
@@ -189,7 +207,7 @@ def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{k=j}^{j+m-1} (A_m[k+m] - A_m[k]) = B_m[j+m] - B_m[j], j = 0 … M-3m+1
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
-    for i, m, ws in window_sums_by_factor(y, ms, double=True):
+    for i, m, ws in window_sums_by_factor(y, ms, double=True, b_only=True):
         b = ws.b
         k = y.size - 3 * m + 2
         var[i] = sumsq_combination([(1.0, b[m:]), (-1.0, b[:-m])], k) / (2.0 * float(m) ** 4 * k)

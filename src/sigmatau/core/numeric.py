@@ -78,11 +78,25 @@ def sumsq_combination(terms: Sequence[tuple[float, np.ndarray]], n: int, chunk: 
 def _combine(out: np.ndarray, tmp: Optional[np.ndarray], terms: Sequence[tuple[float, np.ndarray]], lo: int, hi: int) -> None:
     """``out = Σ_k c_k·a_k[lo:hi]`` (left to right)."""
     c0, a0 = terms[0]
-    if c0 == 1.0:
+    rest = terms[1:]
+    if c0 == 1.0 and rest:
+        # a0 + c1·a1 written straight into out: the same single rounding as copying a0 and
+        # then adding, one pass over the chunk less (OADEV: a[m:] - a[:-m] in one subtract).
+        c1, a1 = rest[0]
+        rest = rest[1:]
+        if c1 == 1.0:
+            np.add(a0[lo:hi], a1[lo:hi], out=out)
+        elif c1 == -1.0:
+            np.subtract(a0[lo:hi], a1[lo:hi], out=out)
+        else:
+            t = tmp[: hi - lo]
+            np.multiply(a1[lo:hi], c1, out=t)
+            np.add(a0[lo:hi], t, out=out)
+    elif c0 == 1.0:
         np.copyto(out, a0[lo:hi])
     else:
         np.multiply(a0[lo:hi], c0, out=out)
-    for c, a in terms[1:]:
+    for c, a in rest:
         if c == 1.0:
             np.add(out, a[lo:hi], out=out)
         elif c == -1.0:
@@ -153,7 +167,21 @@ class WindowSums:
     @property
     def a(self) -> np.ndarray:
         """``A_w`` (a view, valid until the next :meth:`advance`)."""
+        if self._A is None:
+            raise AttributeError("A_w was released (release_a)")
         return self._A[: self._y.size - self._w + 1]
+
+    def release_a(self) -> None:
+        """Free ``A`` when only ``B`` is wanted from here on and every later step is a doubling.
+
+        B doubles from B alone; A is needed only by increments and restarts. A
+        caller that keeps to doublings (an octave grid past w = 4, where
+        :meth:`advance` never chooses increments) saves a record-sized array;
+        any later step that would need A raises.
+        """
+        if self._B is None:
+            raise ValueError("release_a needs double=True")
+        self._A = None
 
     @property
     def b(self) -> np.ndarray:
@@ -173,7 +201,11 @@ class WindowSums:
         here = bin(self._w)[2:] if self._w else ""
         chain = len(bits) - 1 + bits.count("1") - 1
         extend = len(bits) - len(here) + bits[len(here):].count("1")
+        if self._A is None and not (here and bits.startswith(here) and bits[len(here):].count("1") == 0):
+            raise ValueError(f"window length {w} from {self._w} needs A_w, which was released")
         if 0 < self._w < w and w - self._w <= min(chain, self.MAX_INCREMENTS - self._steps):
+            if self._A is None:
+                raise ValueError(f"window length {w} from {self._w} needs A_w, which was released")
             # A few unit steps are cheaper than rebuilding (dense grids).
             for _ in range(w - self._w):
                 self._increment()
@@ -205,7 +237,7 @@ class WindowSums:
                 np.multiply(B[lo + w : hi + w], 2.0, out=t)
                 np.add(B[lo:hi], t, out=t)
                 np.add(t, B[lo + 2 * w : hi + 2 * w], out=B[lo:hi])
-        n = M - 2 * w + 1  # length of A_2w
+        n = M - 2 * w + 1 if A is not None else 0  # length of A_2w (none once released)
         for lo in range(0, max(n, 0), C):
             hi = min(lo + C, n)
             if hi - lo <= w:

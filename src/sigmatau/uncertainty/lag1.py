@@ -179,24 +179,38 @@ def lag1_of_series(series: np.ndarray, m: int, *, data_type: str, dmin: int, dma
             f"lag-1 noise identification needs at least {min_points} points at m={m},"
             f" got {n} from {series.size} {data_type} samples"
         )
-    levels: dict[int, np.ndarray] = {}
-
-    def z_at(d: int) -> np.ndarray:
-        # The analysis series differenced d times, made only when an r1 is not yet known.
-        if d not in levels:
-            levels[d] = _analysis_series(series, data_type, m, detrend, min_points) if d == 0 else np.diff(z_at(d - 1))
-            levels.pop(d - 2, None)  # keep at most two levels alive
-        return levels[d]
+    diffs = _Differences(series, data_type, m, detrend, min_points)
 
     def r1_at(d: int) -> float:
-        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
-                        lambda: _lag1_r1(z_at(d), acf))
+        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf), lambda: _lag1_r1(diffs.at(d), acf))
 
     theta = 1 if data_type == "phase" else 0
     d, delta, r1 = _difference_until_white(r1_at, m, dmin, dmax)
     alpha_est = -2.0 * (delta + d) + 2 * theta
     alpha = -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta
     return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(n))
+
+
+class _Differences:
+    """The analysis series at ``m`` differenced d times, made only when an r1 is not yet known.
+
+    A class rather than a recursive closure: a nested function that calls itself is a
+    reference cycle, and the record-sized series it holds would wait for the garbage
+    collector instead of being freed when the identification returns. At most two
+    levels are kept.
+    """
+
+    def __init__(self, series: np.ndarray, dtype: str, m: int, detrend: bool, min_points: int) -> None:
+        self.args = (series, dtype, m, detrend, min_points)
+        self.levels: dict[int, np.ndarray] = {}
+
+    def at(self, d: int) -> np.ndarray:
+        if d not in self.levels:
+            for k in range(d + 1):
+                if k not in self.levels:
+                    self.levels[k] = _analysis_series(*self.args) if k == 0 else np.diff(self.levels[k - 1])
+                    self.levels.pop(k - 2, None)
+        return self.levels[d]
 
 
 def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_points: int) -> np.ndarray:
@@ -209,7 +223,8 @@ def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_
     """
     if detrend and series.size > 3:
         series = _detrend(series, dtype)
-    z = series[::m] if dtype == "phase" else block_means(series, m)
+    # m = 1: the series itself (a mean of one value is that value; no record-sized copy)
+    z = series if m == 1 else (series[::m] if dtype == "phase" else block_means(series, m))
     n = int(z.size)
     if n < min_points:
         raise InsufficientDataError(
