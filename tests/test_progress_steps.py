@@ -79,3 +79,32 @@ def test_no_display_when_quiet_or_not_a_terminal(monkeypatch):
     assert not quiet.enabled
     quiet.event(StepEvent("a", "oadev", False, 1.0, 2.0))  # nothing drawn, nothing raised
     assert common.sys.stderr.getvalue() == ""
+
+
+def test_default_workers_fit_in_the_memory_available(monkeypatch):
+    from sigmatau.errors import SigmaTauWarning
+    from sigmatau.pipeline import analysis
+
+    monkeypatch.setattr(analysis.os, "sched_getaffinity", lambda pid: {0, 1, 2, 3}, raising=False)
+    gib = 2**30
+    monkeypatch.setattr(analysis, "available_memory", lambda: 100.0 * gib)
+    assert analysis._worker_count(None, 6, gib) == 4  # plenty: the cores
+    monkeypatch.setattr(analysis, "available_memory", lambda: 10.0 * gib)
+    assert analysis._worker_count(None, 6, gib) == 2  # 4.5 GiB per worker
+    assert analysis._worker_count(3, 6, gib) == 3  # an explicit request stands
+    monkeypatch.setattr(analysis, "available_memory", lambda: 1.0 * gib)
+    with pytest.warns(SigmaTauWarning, match=r"needs about 4\.5 GiB .* 1\.0 GiB are available.*--chunked"):
+        assert analysis._worker_count(None, 6, gib) == 1
+    monkeypatch.setattr(analysis, "available_memory", lambda: None)  # unknown: the cores
+    assert analysis._worker_count(None, 6, gib) == 4
+    # the main job itself: the log's channels sized, the setting recorded
+    monkeypatch.setattr(analysis, "available_memory", lambda: 4.6 * 8 * 4000.0)
+    a = analyze_log(_log(), statistics=("oadev",), model=False)
+    assert a.settings["workers"] == 1
+
+
+def test_available_memory_reads_meminfo():
+    from sigmatau.pipeline.analysis import available_memory
+
+    avail = available_memory()
+    assert avail is None or avail > 2**20
