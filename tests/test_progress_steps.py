@@ -108,3 +108,38 @@ def test_available_memory_reads_meminfo():
 
     avail = available_memory()
     assert avail is None or avail > 2**20
+
+
+def test_sigmatau_analyze_draws_the_bar_on_a_real_pseudo_terminal(tmp_path):
+    # A fresh pty reports a size of 0 × 0, as under `script` and some CI runners: tqdm left to
+    # itself draws nothing there. stderr on the pty, stdout on a pipe, as a user's `> out.txt`.
+    pytest.importorskip("tqdm")
+    import os
+    import pty
+    import subprocess
+    import sys
+
+    rng = np.random.default_rng(4)
+    log = tmp_path / "log.npz"
+    np.savez(log, gyro_x=rng.standard_normal(200_000) * 1e-3, gyro_y=rng.standard_normal(200_000) * 1e-3,
+             rate=np.array(200.0))
+    master, slave = pty.openpty()
+    proc = subprocess.Popen([sys.executable, "-m", "sigmatau", "analyze", str(log), "--out", str(tmp_path / "o"),
+                             "--no-figures", "--gyro-unit", "rad/s"], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=slave, cwd=tmp_path)
+    os.close(slave)
+    chunks = []
+    while True:
+        try:
+            data = os.read(master, 65536)
+        except OSError:  # EIO: the child closed its end
+            break
+        if not data:
+            break
+        chunks.append(data)
+    proc.stdout.read()
+    proc.stdout.close()
+    assert proc.wait(timeout=300) == 0
+    os.close(master)
+    text = b"".join(chunks).decode("utf-8", "replace")
+    assert "analysing" in text and "left" in text and "gyro_x" in text

@@ -80,12 +80,17 @@ class _StepDisplay:
             return
         with self.lock:
             if self.bar is None:
+                import shutil
+
                 from tqdm import tqdm
 
+                # The size once, with a fallback: a terminal that reports 0 × 0 (a pty without a size,
+                # as under `script` or some CI runners) makes tqdm draw nothing at all.
+                size = shutil.get_terminal_size((100, 24))
                 self.bar = tqdm(total=ev.total, file=sys.stderr, leave=False, mininterval=self.MININTERVAL,
-                                dynamic_ncols=True,
+                                ncols=size.columns or 100, nrows=size.lines or 24,
                                 bar_format="analysing {percentage:3.0f}%|{bar:20}| {elapsed} elapsed,"
-                                           " ≈{remaining} left · {postfix}")
+                                           " ≈{remaining} left{postfix}")
             if ev.done:
                 self.running.pop((ev.channel, ev.step), None)
                 self.bar.update(ev.weight)
