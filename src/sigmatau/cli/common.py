@@ -68,12 +68,9 @@ class _StepDisplay:
         self.bar: Any = None
         self.enabled = False
         if not console.quiet and console.tty:
-            try:
-                import tqdm  # noqa: F401  (only whether it is installed)
-            except ImportError:
-                pass
-            else:
-                self.enabled = True
+            import importlib.util
+
+            self.enabled = importlib.util.find_spec("tqdm") is not None
 
     def event(self, ev: Any) -> None:
         if not self.enabled:
