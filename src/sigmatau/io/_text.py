@@ -14,6 +14,12 @@ Detection, from the first 200 non-comment lines:
 The rest of the file is parsed by ``numpy.loadtxt`` in chunks of 65,536 lines
 into preallocated column arrays, so memory stays near the size of the chosen
 columns as float64 plus one chunk of text.
+
+A large, uncompressed, regular file with a comma, semicolon, tab or pipe
+delimiter and no quotes is first tried with pyarrow's multi-threaded CSV parser
+when pyarrow is installed (:mod:`._arrowcsv`): it yields the same table and
+digest, or gives up on anything irregular and this parser reads the file, so
+errors are always this parser's.
 """
 
 from __future__ import annotations
@@ -24,7 +30,9 @@ import hashlib
 import io
 import itertools
 import lzma
+import os
 import re
+import stat
 import warnings
 import zlib
 from dataclasses import dataclass
@@ -34,6 +42,7 @@ from typing import Iterator, Sequence
 import numpy as np
 
 from ..errors import DataError, ParameterError
+from . import _arrowcsv
 from ._columns import recognise, select, strip_name, time_name
 from ._errors import FormatError, option_hint, repr_kw
 from ._limits import check_allocation
@@ -47,6 +56,10 @@ from ._sniff import (
 __all__ = ["read_csv", "read_stable32"]
 
 CHUNK_ROWS = 1 << 16
+#: Use pyarrow's CSV parser for plain files when it is installed (False: always numpy's loadtxt).
+_FAST_CSV = True
+#: Smaller files are not worth importing pyarrow and starting a reader thread for.
+_FAST_MIN_BYTES = 16 << 20
 _MJD = (15_000.0, 100_000.0)  # 1900 … 2132
 _DATA_TYPE_HINT = option_hint("--data-type phase|freq", "data_type='phase' or 'freq'")
 
@@ -138,9 +151,10 @@ def _load(path: Path, display: str, opts: Options, progress: Progress, flavour: 
             raise FormatError(
                 f"{display}: cannot read the {compression or 'text'} data: {' '.join(str(exc).split())}"
             ) from None
-        hashing.drain()
-    table.sha256 = hashing.sha.hexdigest()
-    table.size = hashing.nbytes
+        if not table.sha256:  # the fast path hashed the whole file itself
+            hashing.drain()
+            table.sha256 = hashing.sha.hexdigest()
+            table.size = hashing.nbytes
     return table
 
 
@@ -174,9 +188,10 @@ def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour:
            compression: str, size: int | None) -> Table:
     names = sniff.names
     cols = _choose_columns(display, opts, flavour, sniff)
-    data, time, n = _read_rows(display, opts, progress, hashing, text, head, sniff, cols, compression, size)
+    data, time, n, digest = _read_rows(path, display, opts, progress, hashing, text, head, sniff, cols,
+                                       compression, size)
     table = Table(
-        format=cols.flavour, columns=tuple(names), data=data, rows=n, sha256="", size=0,
+        format=cols.flavour, columns=tuple(names), data=data, rows=n, sha256=digest[0], size=digest[1],
         time=time, time_name=None if cols.time is None else names[cols.time],
         time_unit=cols.time_unit, units=_column_units(names, cols.channels, sniff),
         detail=_detail(names, head, sniff, compression, cols.skipped), unused=cols.unused,
@@ -240,11 +255,15 @@ def _stable32_columns(display: str, opts: Options, numeric_idx: list[int]) -> _C
     return _Columns("stable32", None, (numeric_idx[0],), None, (), ())
 
 
-def _read_rows(display: str, opts: Options, progress: Progress, hashing: _HashingReader, text: io.TextIOWrapper,
-               head: list[str], sniff: _Sniff, cols: _Columns, compression: str,
-               size: int | None) -> tuple[dict[str, np.ndarray], np.ndarray | None, int]:
+def _read_rows(path: Path, display: str, opts: Options, progress: Progress, hashing: _HashingReader,
+               text: io.TextIOWrapper, head: list[str], sniff: _Sniff, cols: _Columns, compression: str,
+               size: int | None) -> tuple[dict[str, np.ndarray], np.ndarray | None, int, tuple[str, int]]:
     """The selected columns of every data row, parsed in chunks of CHUNK_ROWS lines into float64 columns
-    (int64 time tags when they exceed 2**53), the buffer grown geometrically within the memory check."""
+    (int64 time tags when they exceed 2**53), the buffer grown geometrically within the memory check.
+
+    The last item is the file's SHA-256 and size when the fast path read (and hashed) the whole
+    file, else ``("", 0)`` and the caller hashes the rest of ``hashing``'s stream.
+    """
     names = sniff.names
     time_idx, chans = cols.time, cols.channels
     usecols = ([time_idx] if time_idx is not None else []) + list(chans)
@@ -273,6 +292,11 @@ def _read_rows(display: str, opts: Options, progress: Progress, hashing: _Hashin
     buf = np.empty((k, capacity))
     tbuf = np.empty(capacity, dtype=np.int64 if int_time else np.float64) if time_idx is not None else None
     n = 0
+    if _fast_eligible(path, sniff, cols, compression, size, quoted):
+        fast = _fast_rows(path, display, progress, head, start, sniff, usecols, int_time, buf, tbuf, capacity)
+        if fast is not None:
+            buf, tbuf, n, reader = fast
+            return _finish(names, chans, buf, tbuf, n) + ((reader.sha256, reader.nbytes),)
     line_no = sniff.data_line
     while True:
         lines = list(itertools.islice(rest, CHUNK_ROWS))
@@ -291,11 +315,69 @@ def _read_rows(display: str, opts: Options, progress: Progress, hashing: _Hashin
         progress.update(hashing.nbytes)
     if n == 0:
         raise DataError(f"{display}: no numeric data rows")
-    if capacity > n * 1.05 + 16:
+    return _finish(names, chans, buf, tbuf, n) + (("", 0),)
+
+
+def _finish(names: list[str], chans: Sequence[int], buf: np.ndarray, tbuf: np.ndarray | None,
+            n: int) -> tuple[dict[str, np.ndarray], np.ndarray | None, int]:
+    """The filled part of the column buffers, copied out when the estimate left much unused."""
+    if buf.shape[1] > n * 1.05 + 16:
         buf = buf[:, :n].copy()
         tbuf = None if tbuf is None else tbuf[:n].copy()
     data = {names[j]: buf[c, :n] for c, j in enumerate(chans)}
     return data, None if tbuf is None else tbuf[:n], n
+
+
+def _fast_eligible(path: Path, sniff: _Sniff, cols: _Columns, compression: str, size: int | None,
+                   quoted: bool) -> bool:
+    """Whether the file is a case :mod:`._arrowcsv` may try: a large regular uncompressed file, a
+    one-character delimiter it splits on like ``str.split``, no quotes in the sniffed data lines."""
+    if not _FAST_CSV or size is None or size < _FAST_MIN_BYTES or compression or quoted:
+        return False
+    if cols.flavour != "csv" or sniff.delimiter not in _arrowcsv.DELIMITERS:
+        return False
+    try:
+        regular = stat.S_ISREG(os.stat(path).st_mode)
+    except OSError:
+        return False
+    return regular and _arrowcsv.usable()
+
+
+def _fast_rows(path: Path, display: str, progress: Progress, head: list[str], start: int, sniff: _Sniff,
+               usecols: list[int], int_time: bool, buf: np.ndarray, tbuf: np.ndarray | None, capacity: int
+               ) -> tuple[np.ndarray, np.ndarray | None, int, _arrowcsv.FastReader] | None:
+    """The data rows through :mod:`._arrowcsv` into the column buffers, grown as the reference grows
+    them; None when it gives up (``_arrowcsv.last_outcome`` says why) and the reference must read."""
+    k = buf.shape[0]
+    n = 0
+    try:
+        reader = _arrowcsv.FastReader(path, "".join(head[:start]), sniff.delimiter, sniff.ncols,  # type: ignore[arg-type]
+                                      usecols, int_time)
+        for columns in reader.batches():
+            m = len(columns[0])
+            if n + m > capacity:
+                capacity = max(int(capacity * 1.6), n + m)
+                try:
+                    check_allocation(display, 8 * capacity * (k + 1), "")
+                except (DataError, MemoryError):  # the reference words it, with its own row count
+                    raise _arrowcsv.Fallback("over the memory budget") from None
+                buf, tbuf = _grown(buf, tbuf, n, capacity)
+            offset = 0
+            if tbuf is not None:
+                tbuf[n:n + m] = columns[0]
+                offset = 1
+            for c in range(k):
+                buf[c, n:n + m] = columns[offset + c]
+            n += m
+            progress.update(reader.nbytes)
+    except _arrowcsv.Fallback as why:
+        _arrowcsv.last_outcome = str(why)
+        return None
+    if n == 0:  # the reference words "no numeric data rows" and friends
+        _arrowcsv.last_outcome = "no data rows"
+        return None
+    _arrowcsv.last_outcome = "fast"
+    return buf, tbuf, n, reader
 
 
 def _parse_chunk(lines: list[str], line_no: int, sniff: _Sniff, usecols: list[int], dtype: np.dtype,
