@@ -288,3 +288,102 @@ def test_layering_and_missing_matplotlib():
         "    raise SystemExit('no error')\n"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+# ------------------------------------------------------------------ speed levers keep the figures the same
+
+
+def test_welch_matches_scipy_and_caps_segments():
+    """The fast single-precision Welch is scipy's Welch; day-long records average a fixed number of segments."""
+    from scipy.signal import welch
+
+    from sigmatau.report import signalfig
+
+    rng = np.random.default_rng(3)
+    for n in (20, 33, 1000, 40_000):
+        x = 9.81 + 1e-3 * rng.normal(size=n)  # a large mean: demeaned in double precision first
+        f, p, nperseg, used, nseg = signalfig._welch(x, 100.0)
+        f0, p0 = welch(x, fs=100.0, window="hann", nperseg=nperseg, noverlap=nperseg - max(1, nperseg // 2),
+                       detrend="constant")
+        np.testing.assert_allclose(f, f0, rtol=1e-12)
+        np.testing.assert_allclose(p[1:], p0[1:], rtol=1e-4)
+        assert used == nseg
+    cap = signalfig._MAX_WELCH_SEGMENTS
+    n = (cap + 40) * 16  # segments of 16: more half-overlapping segments than the cap
+    x = rng.normal(size=n)
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(signalfig.math, "log2", lambda v: 4.0)  # force 16-point segments
+        f, p, nperseg, used, nseg = signalfig._welch(x, 10.0)
+    assert nperseg == 16 and used == cap < nseg
+    np.testing.assert_allclose(np.median(p[1:-1]), 2.0 / 10.0, rtol=0.2)  # σ² = 1 over 5 Hz, one-sided
+
+
+def test_lag1_correlation_matches_direct_formula():
+    from sigmatau.report import signalfig
+
+    rng = np.random.default_rng(4)
+    for x in (np.cumsum(rng.normal(size=5000)) + 1e3, rng.normal(size=3_000_001), np.arange(5.0)):
+        a, b = x[:-1] - x[:-1].mean(), x[1:] - x[1:].mean()
+        direct = float(a @ b) / np.sqrt(float(a @ a) * float(b @ b))
+        assert signalfig._lag1_correlation(x, chunk=1 << 16) == pytest.approx(direct, abs=1e-12)
+    assert np.isnan(signalfig._lag1_correlation(np.full(10, 0.5)))
+
+
+def test_log_labels_same_per_tick_and_per_axis(group_figure):
+    """format_ticks (one view lookup per axis) gives the labels of the per-tick call."""
+    for ax in group_figure.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            for fmt, locs in ((axis.get_major_formatter(), axis.get_majorticklocs()),
+                              (axis.get_minor_formatter(), axis.get_minorticklocs())):
+                if type(fmt).__name__ == "_Log":
+                    assert fmt.format_ticks(locs) == [fmt(v) for v in locs]
+    fig = plots.signal_figure(np.random.default_rng(2).normal(size=4000), rate=100.0, name="x", unit="g")
+    yaxis = fig.axes[1].yaxis  # PSD of white noise: less than two decades, minor ticks labelled
+    labels = yaxis.get_minor_formatter().format_ticks(yaxis.get_minorticklocs())
+    assert any("×10" in lab for lab in labels)
+
+
+def _bbox_inside(inner, outer, tol=1.0):
+    return (inner.x0 >= outer.x0 - tol and inner.y0 >= outer.y0 - tol and inner.x1 <= outer.x1 + tol
+            and inner.y1 <= outer.y1 + tol)
+
+
+def test_single_layout_pass_is_settled_and_nothing_is_cut_or_overlapping(group_figure):
+    """The layout done once is the constrained layout's fixed point; legends and labels fit and do not collide."""
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    fig = group_figure
+    renderer = fig.canvas.get_renderer()
+    fig.canvas.draw()
+    before = [ax.get_position().bounds for ax in fig.axes]
+    fig.set_layout_engine(ConstrainedLayoutEngine())
+    try:
+        fig.get_layout_engine().execute(fig)
+        after = [ax.get_position().bounds for ax in fig.axes]
+    finally:
+        fig.set_layout_engine("none")
+        for ax, pos in zip(fig.axes, before):
+            ax.set_position(pos)
+    np.testing.assert_allclose(after, before, atol=2e-3)
+    fig.canvas.draw()
+    page = fig.bbox
+    legends = [*fig.legends, *(ax.get_legend() for ax in fig.axes if ax.get_legend() is not None)]
+    assert len(legends) == 4
+    for leg in legends:
+        assert _bbox_inside(leg.get_window_extent(renderer), page)
+    for ax in fig.axes:
+        leg = ax.get_legend()
+        if leg is None:
+            continue
+        xlabel = ax.xaxis.label.get_window_extent(renderer)
+        box = leg.get_window_extent(renderer)
+        assert box.y1 < xlabel.y0  # the term legend hangs below the τ label
+        assert box.y0 > fig.legends[0].get_window_extent(renderer).y1 - 1.0
+    for ax in fig.axes:
+        if ax.get_title():
+            title = ax.title.get_window_extent(renderer)
+            assert _bbox_inside(title, page) and title.y0 >= ax.get_window_extent(renderer).y1
+    sig = plots.signal_figure(np.random.default_rng(2).normal(size=40_000), rate=100.0, name="x", unit="g")
+    sig.canvas.draw()
+    for ax in sig.axes:
+        assert _bbox_inside(ax.get_tightbbox(sig.canvas.get_renderer()), sig.bbox)

@@ -12,8 +12,9 @@ import numpy as np
 
 from ..errors import ParameterError
 from .figbase import (_DISPLAY, _FALLBACK_COLORS, _FS, _FS_LABEL, _FS_TITLE, _MARKERS, _PROMINENT, _SLOPE_TEXT,
-                      _TIME_STATS, STATISTIC_COLORS, ChannelCurves, _freeze_layout, _log_axis, _log_limits,
-                      _Panel, _positive, _pretty, _style_log_axes, new_figure)
+                      _TIME_STATS, STATISTIC_COLORS, _BELOW_AXES_PT, ChannelCurves, _below_axes, _freeze_layout,
+                      _log_axis, _log_limits, _Panel, _positive, _pretty, _set_title, _spines_out_of_layout,
+                      _style_log_axes, new_figure)
 from .figmodel import _datasheet_terms, _draw_datasheet, _draw_model
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -87,6 +88,7 @@ def _draw_statistics(p: _Panel, ch: ChannelCurves, stats: list[str], legend: dic
             p.twin.set_yscale("log")
             _log_axis(p.twin.yaxis)
             p.twin.tick_params(labelsize=_FS, which="both", direction="in")
+            _spines_out_of_layout(p.twin)
         ax = p.twin if time_stat else p.ax
         color = _stat_color(stat, order)
         strong = stat == prominent
@@ -293,7 +295,7 @@ def _finish_panel(p: _Panel, ch: ChannelCurves, ylim: tuple[float, float], tlim:
     if label_y:
         ax.set_ylabel(f"σ(τ) [{_pretty(ch.unit)}]" if ch.unit else "σ_y(τ) (fractional frequency)",
                       fontsize=_FS_LABEL)
-    ax.set_title(ch.name, fontsize=_FS_TITLE)
+    _set_title(ax, ch.name, _FS_TITLE)
     if p.twin is not None:
         if tlim is not None:
             p.twin.set_ylim(*tlim)
@@ -308,8 +310,10 @@ def _finish_panel(p: _Panel, ch: ChannelCurves, ylim: tuple[float, float], tlim:
     elif ch.model is None:
         _draw_slope_fan(p, xlim, ylim)
     if p.term_handles:
-        ax.legend(handles=p.term_handles, loc="upper center", bbox_to_anchor=(0.5, -0.17), fontsize=_FS - 0.5,
-                  frameon=False, handlelength=2.6, borderaxespad=0.0)
+        # A fixed distance below the axes (not a fraction of their height): one layout pass suffices.
+        ax.legend(handles=p.term_handles, loc="upper center", bbox_to_anchor=(0.5, 0.0),
+                  bbox_transform=_below_axes(ax, _BELOW_AXES_PT), fontsize=_FS - 0.5, frameon=False,
+                  handlelength=2.6, borderaxespad=0.0)
 
 
 def _figure_legend(fig: "Figure", legend: dict, ncols: int) -> None:
