@@ -16,6 +16,7 @@ import pytest
 
 from sigmatau.stats import total as total_mod
 from sigmatau.stats.total import _totvar_kernel
+from test_total import totvar_plain  # the written definition, one term at a time
 
 RTOL = 1e-12
 
@@ -32,23 +33,6 @@ def totvar_extension(x, ms, tau0):
         d2 = ext[i - m + c] - 2.0 * ext[i + c] + ext[i + m + c]
         var[k] = float(np.sum(d2 * d2)) / (2.0 * (m * tau0) ** 2 * (n_pts - 2))
     return var
-
-
-def totvar_loop(x, m, tau0):
-    """TOTVAR by the written definition, one term at a time (short records only)."""
-    n_pts = len(x)
-
-    def xs(j):
-        if j < 0:
-            return 2.0 * x[0] - x[-j]
-        if j > n_pts - 1:
-            return 2.0 * x[n_pts - 1] - x[2 * (n_pts - 1) - j]
-        return x[j]
-
-    acc = 0.0
-    for i in range(1, n_pts - 1):
-        acc += (xs(i - m) - 2.0 * xs(i) + xs(i + m)) ** 2
-    return acc / (2.0 * (m * tau0) ** 2 * (n_pts - 2))
 
 
 def _records():
@@ -85,7 +69,7 @@ def test_short_records_match_the_written_definition(name):
     x = RECORDS[name]
     ms = np.arange(1, x.size, dtype=np.int64)
     var, _ = _totvar_kernel(x, ms, 2.5)
-    want = [totvar_loop(list(x), int(m), 2.5) for m in ms]
+    want = [totvar_plain(list(x), int(m), 2.5)[0] for m in ms]  # the written definition, term by term
     np.testing.assert_allclose(var, want, rtol=RTOL, atol=0)
 
 
