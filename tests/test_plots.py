@@ -387,3 +387,17 @@ def test_single_layout_pass_is_settled_and_nothing_is_cut_or_overlapping(group_f
     sig.canvas.draw()
     for ax in sig.axes:
         assert _bbox_inside(ax.get_tightbbox(sig.canvas.get_renderer()), sig.bbox)
+
+
+def test_a_prepared_signal_draws_the_same_figure(rng):
+    from sigmatau.report import plots
+    from sigmatau.report.figbase import figure_to_bytes
+
+    x = rng.standard_normal(40_000) * 1e-3
+    prepared = plots.prepare_signal(x, rate=100.0, name="gyro_x")
+    assert prepared.x is x and prepared.envelope is not None and prepared.psd is not None
+    # each figure saved before the next is built (ids in the SVG follow the order of building)
+    with_prep = figure_to_bytes(plots.signal_figure(x, rate=100.0, name="gyro_x", unit="rad/s",
+                                                    prepared=prepared), "svg")
+    alone = figure_to_bytes(plots.signal_figure(x, rate=100.0, name="gyro_x", unit="rad/s"), "svg")
+    assert with_prep == alone

@@ -34,6 +34,7 @@ import re
 import shutil
 import tempfile
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any, Optional, Sequence, Union
 
@@ -142,12 +143,24 @@ def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[s
                                 " intervals (bands), the fitted noise model and its terms, read-off points and"
                                 " slope guides"})
     log = analysis.log
-    for c in analysis.channels[:MAX_SIGNAL_FIGURES]:
-        fig = plots.signal_figure(log[c.name], rate=log.rate, name=c.name, unit=c.unit, model=c.model)
-        stem = _safe_stem(f"signal_{c.name}", taken)
-        plots.save_figure(fig, folder / stem, formats=formats)
-        made.append({"stem": stem, "kind": "signal", "group": c.group,
-                     "caption": f"{c.name}: time series, power spectral density (Welch) and lag plot"})
+    chans = analysis.channels[:MAX_SIGNAL_FIGURES]
+    # The passes over each record (envelope, PSD, lag-1 correlation) run in two threads, up to two
+    # channels ahead, while this thread draws: matplotlib draws one figure at a time, numpy does not
+    # need the GIL (a 24 h channel: 1.3 s of such passes against 0.9 s of drawing and saving).
+    with ThreadPoolExecutor(max_workers=2, thread_name_prefix="sigmatau-figure") as pool:
+        ahead = [pool.submit(plots.prepare_signal, log[c.name], rate=log.rate, name=c.name) for c in chans[:2]]
+        for i, c in enumerate(chans):
+            prepared = ahead[i].result()
+            if i + 2 < len(chans):
+                nxt = chans[i + 2]
+                ahead.append(pool.submit(plots.prepare_signal, log[nxt.name], rate=log.rate, name=nxt.name))
+            fig = plots.signal_figure(log[c.name], rate=log.rate, name=c.name, unit=c.unit, model=c.model,
+                                      prepared=prepared)
+            ahead[i] = None  # type: ignore[call-overload]  # drawn: its data may go
+            stem = _safe_stem(f"signal_{c.name}", taken)
+            plots.save_figure(fig, folder / stem, formats=formats)
+            made.append({"stem": stem, "kind": "signal", "group": c.group,
+                         "caption": f"{c.name}: time series, power spectral density (Welch) and lag plot"})
     return made
 
 

@@ -11,7 +11,8 @@ Plotting never computes a statistic: :func:`sigma_tau_figure` takes
 :class:`~sigmatau.core.result.StabilityResult` curves and the
 :class:`~sigmatau.imu.NoiseModel` fitted on them. :func:`signal_figure`
 draws the design tip's Figure 2 panels (time series, Welch PSD, lag plot)
-for one channel. :func:`save_figure` and :func:`figure_to_data_uri` write
+for one channel, from the passes over the record that :func:`prepare_signal`
+makes (separately, so that they can run in other threads). :func:`save_figure` and :func:`figure_to_data_uri` write
 PNG/SVG/PDF with reproducible bytes (no dates, fixed SVG ids).
 
 Colours are the Okabe–Ito palette for the statistics (each statistic keeps
@@ -42,7 +43,7 @@ from .figbase import (STATISTIC_COLORS, TERM_COLORS, ChannelCurves, figure_to_by
 # Outside __all__ but used through this module by the batch fleet figures (scale.batch).
 from .figbase import matplotlib_modules, new_figure  # noqa: F401
 from .sigmafig import sigma_tau_figure
-from .signalfig import signal_figure
+from .signalfig import SignalData, prepare_signal, signal_figure
 
 __all__ = [
     "ChannelCurves",
@@ -50,6 +51,8 @@ __all__ = [
     "TERM_COLORS",
     "sigma_tau_figure",
     "signal_figure",
+    "prepare_signal",
+    "SignalData",
     "save_figure",
     "figure_to_bytes",
     "figure_to_data_uri",

@@ -6,6 +6,7 @@ Public through :mod:`sigmatau.report.plots` (:func:`signal_figure`).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Optional
 
 import numpy as np
@@ -136,6 +137,59 @@ def _model_psd(model: "NoiseModel", f: np.ndarray, factor: float) -> dict[str, n
     return out
 
 
+@dataclass(frozen=True)
+class SignalData:
+    """What :func:`signal_figure` draws, computed from the samples (:func:`prepare_signal`).
+
+    The passes over the record (min/max envelope, Welch PSD, lag-1
+    correlation) are here, apart from the drawing, so that the main job can
+    prepare several channels in threads (numpy releases the GIL) while
+    matplotlib draws one figure at a time.
+
+    Attributes
+    ----------
+    x : numpy.ndarray
+        The finite samples (the caller's array when all are finite; not copied).
+    times : numpy.ndarray or None
+        Their times in seconds when NaN were dropped, else None.
+    envelope : tuple of numpy.ndarray or None
+        ``(edges, lo, hi, mean)`` of the display bins for long records, else None.
+    psd : tuple or None
+        ``(freqs, pxx, nperseg, used, nseg)`` of :func:`_welch`, or None (too short or constant).
+    r1 : float
+        Lag-1 correlation of the whole record.
+    """
+
+    x: np.ndarray
+    times: Optional[np.ndarray]
+    envelope: Optional[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+    psd: Optional[tuple[np.ndarray, np.ndarray, int, int, int]]
+    r1: float
+
+
+#: Display bins of the time-series panel: longer records are drawn as min/max envelope and mean.
+_SERIES_BINS = 1500
+
+
+def prepare_signal(samples: Any, *, rate: float, name: str) -> SignalData:
+    """The data of :func:`signal_figure` for one channel: every pass over the record, no drawing.
+
+    Raises
+    ------
+    DataError
+        Non-numeric or non-1-D samples, or fewer than 4 finite values.
+    """
+    rate = check_rate(rate)
+    x, t_all = _finite_samples(samples, rate, name)
+    envelope = None
+    if x.size > 2 * _SERIES_BINS:
+        edges = np.linspace(0, x.size, _SERIES_BINS + 1).astype(np.int64)
+        envelope = (edges, np.minimum.reduceat(x, edges[:-1]), np.maximum.reduceat(x, edges[:-1]),
+                    np.add.reduceat(x, edges[:-1]) / np.diff(edges))
+    psd = _welch(x, rate) if x.size >= 16 and np.ptp(x) > 0 else None
+    return SignalData(x, t_all, envelope, psd, _lag1_correlation(x))
+
+
 def signal_figure(
     samples: Any,
     *,
@@ -144,6 +198,7 @@ def signal_figure(
     unit: str,
     model: Optional["NoiseModel"] = None,
     max_points: int = 20000,
+    prepared: Optional[SignalData] = None,
 ) -> "Figure":
     """The design tip's Figure 2 for one channel: time series, PSD and lag plot.
 
@@ -161,6 +216,9 @@ def signal_figure(
         When given, the PSD shows each resolved term's spectrum and their sum.
     max_points : int
         Largest number of points drawn in the lag plot (subsampled evenly).
+    prepared : SignalData, optional
+        :func:`prepare_signal` of these samples, computed beforehand (in
+        another thread, say); ``samples`` is then not read again.
 
     Returns
     -------
@@ -184,7 +242,7 @@ def signal_figure(
         raise ParameterError(f"name={name!r} and unit={unit!r} must be strings")
     if isinstance(max_points, bool) or not isinstance(max_points, (int, np.integer)) or max_points < 100:
         raise ParameterError(f"max_points={max_points!r} must be an integer ≥ 100")
-    x, t_all = _finite_samples(samples, rate, name)
+    data = prepare_signal(samples, rate=rate, name=name) if prepared is None else prepared
 
     fig = new_figure((12.6, 3.9))
     gs = fig.add_gridspec(1, 3, width_ratios=[1.55, 1.25, 1.0])
@@ -192,9 +250,9 @@ def signal_figure(
     ulabel = _pretty(unit)
     ustr = f" [{ulabel}]" if ulabel else ""
     color = STATISTIC_COLORS["oadev"]
-    _draw_series(ax_t, x, t_all, rate, f"{name}{ustr}", color)
-    _draw_psd(ax_f, x, rate, unit, model, color)
-    _draw_lag(ax_l, x, max_points, ustr, color)
+    _draw_series(ax_t, data, rate, f"{name}{ustr}", color)
+    _draw_psd(ax_f, data, rate, unit, model, color)
+    _draw_lag(ax_l, data, max_points, ustr, color)
     fig.suptitle(f"{name}: time series, spectrum and lag plot", fontsize=_FS_TITLE + 1)
     _freeze_layout(fig)
     return fig
@@ -226,21 +284,18 @@ def _finite_samples(samples: Any, rate: float, name: str) -> tuple[np.ndarray, O
     return x, t_all
 
 
-def _draw_series(ax_t: Any, x: np.ndarray, t_all: Optional[np.ndarray], rate: float, ylabel: str,
-                 color: str) -> None:
+def _draw_series(ax_t: Any, data: SignalData, rate: float, ylabel: str, color: str) -> None:
     """Panel (a): the samples, or for long records the min/max envelope and mean of ≈1500 bins."""
+    x, t_all = data.x, data.times
     n = x.size
     duration = n / rate if t_all is None else float(t_all[-1] - t_all[0]) + 1.0 / rate
     scale, tu = _time_scale(duration)
-    nb = 1500
-    if n <= 2 * nb:
+    nb = _SERIES_BINS
+    if data.envelope is None:
         t = (np.arange(n) / rate if t_all is None else t_all) / scale
         ax_t.plot(t, x, color=color, linewidth=0.7, gid="series")
     else:
-        edges = np.linspace(0, n, nb + 1).astype(np.int64)
-        lo = np.minimum.reduceat(x, edges[:-1])
-        hi = np.maximum.reduceat(x, edges[:-1])
-        mean = np.add.reduceat(x, edges[:-1]) / np.diff(edges)
+        edges, lo, hi, mean = data.envelope
         tpos = (edges[:-1] + edges[1:]) / 2.0
         t = (tpos / rate if t_all is None else np.interp(tpos, np.arange(n), t_all)) / scale
         binw = n / nb / rate
@@ -256,11 +311,12 @@ def _draw_series(ax_t: Any, x: np.ndarray, t_all: Optional[np.ndarray], rate: fl
     ax_t.tick_params(labelsize=_FS)
 
 
-def _draw_psd(ax_f: Any, x: np.ndarray, rate: float, unit: str, model: Optional["NoiseModel"], color: str) -> None:
+def _draw_psd(ax_f: Any, data: SignalData, rate: float, unit: str, model: Optional["NoiseModel"],
+              color: str) -> None:
     """Panel (b): the log-binned Welch PSD, with the model's term spectra when there is a model."""
     _style_log_axes(ax_f)
-    if x.size >= 16 and np.ptp(x) > 0:
-        freqs, pxx, nperseg, used, nseg = _welch(x, rate)
+    if data.psd is not None:
+        freqs, pxx, nperseg, used, nseg = data.psd
         fb, pb = _log_bin(freqs, pxx)
         pos = pb > 0
         some = f", {used:,} of {nseg:,} segments" if used < nseg else ""
@@ -299,7 +355,7 @@ def _draw_model_psd(ax_f: Any, model: "NoiseModel", unit: str, f_m: np.ndarray) 
                   label="model sum", gid="psd-model")
 
 
-def _lag1_correlation(x: np.ndarray, chunk: int = 1 << 20) -> float:
+def _lag1_correlation(x: np.ndarray, chunk: int = 1 << 16) -> float:
     """Pearson correlation of ``x[k]`` with ``x[k+1]`` over the whole record; NaN when either is constant.
 
     Accumulated over chunks of the record shifted by its mean (so the sums do
@@ -315,21 +371,23 @@ def _lag1_correlation(x: np.ndarray, chunk: int = 1 << 20) -> float:
         da, db = d[:-1], d[1:]
         sa += float(da.sum())
         sb += float(db.sum())
-        saa += float(da @ da)
-        sbb += float(db @ db)
-        sab += float(da @ db)
+        # einsum, not @: BLAS threads stall on a busy machine (core.numeric.sumsq)
+        saa += float(np.einsum("i,i->", da, da))
+        sbb += float(np.einsum("i,i->", db, db))
+        sab += float(np.einsum("i,i->", da, db))
     cov = sab - sa * sb / m
     den = math.sqrt(max(saa - sa * sa / m, 0.0) * max(sbb - sb * sb / m, 0.0))
     return cov / den if den > 0 else math.nan
 
 
-def _draw_lag(ax_l: Any, x: np.ndarray, max_points: int, ustr: str, color: str) -> None:
+def _draw_lag(ax_l: Any, data: SignalData, max_points: int, ustr: str, color: str) -> None:
     """Panel (c): ``x[k+1]`` against ``x[k]`` (at most ``max_points``) and the lag-1 correlation r₁."""
     from matplotlib.ticker import MaxNLocator
 
+    x = data.x
     n = x.size
     a, b = x[:-1], x[1:]
-    r = _lag1_correlation(x)
+    r = data.r1
     idx = np.unique(np.linspace(0, n - 2, min(max_points, n - 1)).astype(np.int64))
     ax_l.scatter(a[idx], b[idx], s=2.0, color=color, alpha=0.35 if idx.size > 2000 else 0.7, linewidths=0,
                  rasterized=True, gid="lag")
