@@ -176,3 +176,22 @@ def test_the_main_job_equals_each_statistic_called_alone():
         _assert_same(res, sigmatau.stats.FUNCTIONS[name](gx, rate=200.0, taus="octave", **extra))
     for term in ("N", "B", "K"):
         assert getattr(ch.model, term) == getattr(model, term)
+
+
+def test_the_scope_never_locks_memory_of_an_array_like_source():
+    # An array-like whose __array__ returns its own buffer (a pandas Series does): validation of
+    # all-zero float64 data hands that very buffer on; it must stay the caller's, writeable.
+    class Channel:
+        def __init__(self, a):
+            self.a = a
+
+        def __array__(self, dtype=None, copy=None):
+            return self.a
+
+    buf = np.zeros(200)
+    ch = Channel(buf)
+    with shared_record(ch):
+        for name in ("oadev", "totdev", "theo1", "hdev"):
+            sigmatau.stats.FUNCTIONS[name](ch)
+    assert buf.flags.writeable
+    buf[0] = 1.0

@@ -50,6 +50,22 @@ class _Record:
         self.forms: dict[Hashable, np.ndarray] = {}
         self.form_ids: dict[int, Hashable] = {}
         self.memo: dict[tuple[Hashable, Hashable], Any] = {}
+        self.source_array: Optional[np.ndarray] = None  # np.asarray(source), when first needed
+
+    def may_alias(self, arr: np.ndarray) -> bool:
+        """Whether ``arr`` may share memory with the caller's data.
+
+        The source may be an array-like whose ``__array__`` hands out its own buffer
+        (a pandas Series): ``numpy.asarray`` of it is then the caller's memory, and
+        validation returns that very array for data it need not change (all zeros,
+        float64 already). Unknown means yes.
+        """
+        try:
+            if self.source_array is None:
+                self.source_array = np.asarray(self.source)
+            return bool(np.may_share_memory(arr, self.source_array))
+        except Exception:  # an array-like numpy cannot read: it is not locked
+            return True
 
     def form_key(self, obj: object) -> Optional[Hashable]:
         """The key under which ``obj`` was handed out (the source itself is ``()``), or None."""
@@ -116,7 +132,7 @@ def derived(data: object, key: Hashable, make: Callable[[], T]) -> T:
         value = make()
         for item in value if isinstance(value, tuple) else (value,):
             if isinstance(item, np.ndarray) and item is not rec.source and rec.form_key(item) is None:
-                if item.flags.owndata:  # a view may alias the caller's array: never lock theirs
+                if item.flags.owndata and not rec.may_alias(item):  # never lock the caller's memory
                     item.flags.writeable = False
                 rec.forms[(full, len(rec.forms))] = item
                 rec.form_ids[id(item)] = (full, len(rec.forms) - 1)
