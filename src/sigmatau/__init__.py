@@ -49,7 +49,6 @@ __all__ = [
 ]
 
 
-
 def _is_dask(data: object) -> bool:
     # By the type's module: dask is never imported for this test.
     return type(data).__module__.startswith("dask.")

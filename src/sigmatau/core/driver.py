@@ -163,8 +163,8 @@ def validated_samples(data: object, *, remove_offset: bool) -> tuple[np.ndarray,
     scope's record (the main job's channel); ``remove_offset`` changes the samples
     only for integer data, so float data share one copy whatever it is.
     """
-    differs = remove_offset and not (isinstance(data, np.ndarray) and not np.issubdtype(data.dtype, np.integer))
-    return derived(data, ("validated", differs),
+    float_array = isinstance(data, np.ndarray) and not np.issubdtype(data.dtype, np.integer)
+    return derived(data, ("validated", remove_offset and not float_array),
                    lambda: scale_to_unit(as_series(data, remove_offset=remove_offset)))
 
 

@@ -134,8 +134,9 @@ def derived(data: object, key: Hashable, make: Callable[[], T]) -> T:
             if isinstance(item, np.ndarray) and item is not rec.source and rec.form_key(item) is None:
                 if item.flags.owndata and not rec.may_alias(item):  # never lock the caller's memory
                     item.flags.writeable = False
-                rec.forms[(full, len(rec.forms))] = item
-                rec.form_ids[id(item)] = (full, len(rec.forms) - 1)
+                form = (full, len(rec.forms))
+                rec.forms[form] = item
+                rec.form_ids[id(item)] = form
         rec.memo[full] = value
     return rec.memo[full]  # type: ignore[no-any-return]
 

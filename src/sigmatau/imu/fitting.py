@@ -87,11 +87,6 @@ def _chi2_tail(chi2: float, mean: float, sd: float) -> float:
     return float(chdtrc(nu, chi2 * nu / mean))
 
 
-def _irls(design: np.ndarray, var: np.ndarray, rel: np.ndarray, signed: np.ndarray, iterations: int = 3):
-    """:func:`sigmatau.uncertainty.powerfit.irls_fit` with the ``signed`` columns (Q's may be negative)."""
-    return irls_fit(design, var, rel, signed=signed, iterations=iterations)
-
-
 def _normal_inverse(aw: np.ndarray) -> np.ndarray:
     """``pinv(awᵀ·aw)`` with the columns equilibrated first.
 
@@ -113,7 +108,7 @@ def _fit_once(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
     signed = np.array([c == 0 for c in cols])
-    h, sigma, chi2 = _irls(sub, var, rel, signed)
+    h, sigma, chi2 = irls_fit(sub, var, rel, signed=signed)
     aw = sub / sigma[:, None]
     bread = _normal_inverse(aw)
     model_terms = sub * np.abs(h)
@@ -147,7 +142,7 @@ def _fit_free(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     sub = design[:, cols]
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
-    h, sigma, _ = _irls(sub, var, rel, np.ones(len(cols), bool))
+    h, sigma, _ = irls_fit(sub, var, rel, signed=np.ones(len(cols), bool))
     aw = sub / sigma[:, None]
     bread = _normal_inverse(aw)
     model_terms = sub * np.abs(h)
@@ -169,7 +164,7 @@ def _chi2_expectation(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus:
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
     signed = np.array([c == 0 for c in cols])
-    h, sigma, chi2 = _irls(sub, var, rel, signed)
+    h, sigma, chi2 = irls_fit(sub, var, rel, signed=signed)
     aw = sub / sigma[:, None]
     hat = aw @ _normal_inverse(aw) @ aw.T
     dominant = np.array([_ALPHA[TERMS[cols[k]]] for k in np.argmax(sub * np.abs(h), axis=1)])

@@ -49,7 +49,7 @@ Examples
 from __future__ import annotations
 
 from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
-from ._limits import MAX_CHANNELS, MAX_LINE_CHARS
+from ._limits import MAX_CHANNELS, MAX_LINE_CHARS, memory_budget
 from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
 from ._read import MIN_SAMPLES, detect_format, list_topics, read
 from ._registry import formats

@@ -523,15 +523,11 @@ def _worker_count(workers: Optional[int], n_channels: int, channel_bytes: int = 
 
 
 def available_memory() -> Optional[float]:
-    """Bytes of memory available to new allocations (Linux ``MemAvailable``), or None when unknown."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except (OSError, ValueError, IndexError):
-        pass
-    return None
+    """Bytes that new allocations may use: :func:`sigmatau.io.memory_budget` (the least of
+    ``MemAvailable``, the cgroup limit and ``ulimit -v``), or None when none is known."""
+    from ..io import memory_budget
+
+    return memory_budget()
 
 
 def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: Any, confidence: float,

@@ -40,17 +40,13 @@ _MAX_WELCH_SEGMENTS = 128
 
 
 def _welch(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray, int, int, int]:
-    """One-sided Welch PSD (Hann, 50 % overlap, each segment's mean removed), in chunks to bound memory.
+    """One-sided Welch PSD (Hann, 50 % overlap, each segment's mean removed) of the PSD panel.
 
-    The same estimate as ``scipy.signal.welch(x, rate, "hann", nperseg,
-    nperseg // 2, detrend="constant", scaling="density")`` over the segments
-    used (all of them up to :data:`_MAX_WELCH_SEGMENTS`), computed for speed:
-    the segments are views into ``x`` (no copy of the overlapping record), each
-    chunk of segments is demeaned in double precision, then windowed and
-    transformed in single precision with scipy's FFT on all cores. Single
-    precision changes the plotted PSD by about 1e-6 relative, far below the
-    line width, and halves the cost of the transforms, which dominate the
-    figure's data work.
+    :func:`sigmatau.imu.checks.welch_density` with segments of about N/16
+    samples, at most :data:`_MAX_WELCH_SEGMENTS` of them, windowed and
+    transformed in single precision on all cores: single precision changes the
+    plotted PSD by about 1e-6 relative, far below the line width, and halves
+    the cost of the transforms, which dominate the figure's data work.
 
     Returns
     -------
@@ -60,38 +56,16 @@ def _welch(x: np.ndarray, rate: float) -> tuple[np.ndarray, np.ndarray, int, int
     used, nseg : int
         Segments averaged, out of the record's ``nseg`` half-overlapping ones.
     """
-    from scipy import fft as sfft
-    from scipy.signal import get_window
+    from ..imu.checks import welch_density
 
     n = x.size
     # Segments of n/16 (≈ 30 averaged with the overlap: ±25 % at the lowest frequencies),
     # a power of two between 16 and 2^18; the log-frequency binning below smooths the rest.
     nperseg = n if n < 32 else int(2 ** min(18, max(4, math.floor(math.log2(n / 16)))))
-    step = max(1, nperseg // 2)
-    nseg = (n - nperseg) // step + 1
-    segments = np.lib.stride_tricks.sliding_window_view(x, nperseg)[::step][:nseg]
-    if nseg > _MAX_WELCH_SEGMENTS:
-        # Picked chunk by chunk below: indexing them all at once would copy 128 segments (0.27 GB).
-        pick = np.linspace(0, nseg - 1, _MAX_WELCH_SEGMENTS).round().astype(np.int64)
-    else:
-        pick = None
-    used = nseg if pick is None else pick.size
-    per_chunk = max(1, (1 << 22) // nperseg)
-    win = get_window("hann", nperseg).astype(np.float32)  # periodic, as scipy.signal.welch uses
-    buf = np.empty((min(per_chunk, used), nperseg), dtype=np.float32)
-    acc = np.zeros(nperseg // 2 + 1)
-    for s in range(0, used, per_chunk):
-        chunk = segments[s: s + per_chunk] if pick is None else segments[pick[s: s + per_chunk]]
-        seg = buf[: chunk.shape[0]]
-        np.subtract(chunk, chunk.mean(axis=1, keepdims=True), out=seg, casting="same_kind")
-        seg *= win
-        spec = sfft.rfft(seg, axis=1, workers=-1)
-        acc += np.einsum("ij,ij->j", spec.real, spec.real, dtype=np.float64)
-        acc += np.einsum("ij,ij->j", spec.imag, spec.imag, dtype=np.float64)
-    pxx = acc / (used * rate * float(np.sum(win.astype(np.float64) ** 2)))
-    # One-sided: every bin but DC (and Nyquist for an even segment length) counts twice.
-    pxx[1: None if nperseg % 2 else -1] *= 2.0
-    return sfft.rfftfreq(nperseg, 1.0 / rate), pxx, nperseg, used, nseg
+    nseg = (n - nperseg) // (nperseg - nperseg // 2) + 1
+    freqs, pxx = welch_density(x, rate, nperseg, remove_mean=False, max_segments=_MAX_WELCH_SEGMENTS,
+                               single=True, workers=-1)
+    return freqs, pxx, nperseg, min(nseg, _MAX_WELCH_SEGMENTS), nseg
 
 
 def _log_bin(f: np.ndarray, p: np.ndarray, per_decade: int = 40) -> tuple[np.ndarray, np.ndarray]:

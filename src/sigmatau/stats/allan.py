@@ -246,4 +246,3 @@ def tdev(
     """
     return run(TVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
                alpha=alpha, confidence=confidence, ci=ci)
-

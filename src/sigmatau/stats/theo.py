@@ -645,10 +645,10 @@ def theoh(
         # Block averages remove white and flicker PM: Fast TheoBR reads it 24-79 % low
         # (docs/theoh-fast.md). κ says the record is PM-dominated: the exact rows instead.
         block = 1
-    mb, vb, nb = _theobr_rows(x, mb, tau0, block, theoh_split(N)[1])
+    k, m_lo = theoh_split(N)
+    mb, vb, nb = _theobr_rows(x, mb, tau0, block, m_lo)
     var = np.concatenate((np.asarray(va, dtype=float), kap.kappa * vb))
     var = unscale_variance(np.where(var < 0.0, 0.0, var), p.exponent, "theoh")
-    k, m_lo = theoh_split(N)
     bias = (
         f"theoh: oavar for tau < {k * tau0:g} s (m < {k}); {_kappa_text(kap)} for tau >= {k * tau0:g} s"
         f" (even m >= {m_lo}, tau = 0.75 m tau0)"
