@@ -228,10 +228,9 @@ def test_non_finite_in_a_middle_chunk():
     with pytest.raises(DataError) as err:
         sigmatau.oadev(chunked.from_array(y, chunk_size=4096))
     text = _one_line(err.value)
-    assert "2 non-finite" in text and "index 31337" in text
-    with pytest.raises(DataError) as ref:
-        sigmatau.oadev(y)
-    assert text == str(ref.value)
+    assert "2 non-finite" in text and "index 31337" in text and "missing samples (NaN gaps)" in text
+    with pytest.raises(DataError, match="1 infinite value.*index 40000"):
+        sigmatau.oadev(y)  # in memory, the NaN is a gap and the inf an error
 
 
 def test_too_short_and_empty():

@@ -159,8 +159,10 @@ def test_errors():
         tie.tierms(np.arange(10.0), data_type="phase", m=0)
     with pytest.raises(DataError):
         tie.mtie([1.0], data_type="phase")
-    with pytest.raises(DataError):
-        tie.tierms([np.nan, 1.0, 2.0])
+    with pytest.raises(DataError, match="missing"):
+        tie.tierms([np.nan, np.nan, np.nan])
+    with pytest.raises(DataError, match="infinite"):
+        tie.tierms([np.inf, 1.0, 2.0])
     with pytest.warns(RangeWarning):
         tie.mtie(np.arange(10.0), data_type="phase", m=9)
 

@@ -11,22 +11,25 @@ protocol defined here and implemented by the scale-out layer.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Callable, Optional, Protocol
+import warnings
+from dataclasses import dataclass, replace
+from typing import Any, Callable, Iterator, Optional, Protocol
 
 import numpy as np
 
 from .validate import (
     as_series, check_data_type, check_rate, remove_linear_phase, scale_to_unit, to_phase, unscale_variance,
 )
-from ..errors import DataError, ParameterError
+from ..errors import DataError, ParameterError, RangeWarning, caller_stacklevel
+from .gaps import GapKernel, detrended_phase, missing_mask, pooled_over_runs, present_runs
 from .result import StabilityResult
 from .shared import derived
 from .taus import select_m
 
 __all__ = [
-    "Statistic", "ScaledPhase", "StreamedSeries", "compute", "is_streamed", "prepare", "prepare_scaled",
-    "register_streamed", "streamed", "validated_samples",
+    "Statistic", "ScaledPhase", "StreamedSeries", "GappedPhase", "compute", "gap_free_runs", "gapped_phase",
+    "drop_empty_factors", "is_streamed", "prepare", "prepare_scaled", "register_streamed", "streamed",
+    "validated_samples",
 ]
 
 #: ``compute(x, ms, tau0) -> (var, n)``: variance and number of terms for each
@@ -77,6 +80,11 @@ class Statistic:
     tau_factor: float = 1.0
     trend_invariant: bool = True
     compute_freq: Optional[Kernel] = None
+    phase_gaps: Optional[GapKernel] = None
+    freq_gaps: Optional[GapKernel] = None
+    pooling: str = "mean"
+    terms_per_point: Optional[Callable[[np.ndarray], np.ndarray]] = None
+    min_run_points: Optional[int] = None
 
 
 class StreamedSeries(Protocol):
@@ -161,11 +169,12 @@ def validated_samples(data: object, *, remove_offset: bool) -> tuple[np.ndarray,
 
     Computed once per :func:`~sigmatau.core.shared.shared_record` scope for the
     scope's record (the main job's channel); ``remove_offset`` changes the samples
-    only for integer data, so float data share one copy whatever it is.
+    only for integer data, so float data share one copy whatever it is. Missing
+    samples (NaN, masked values) are kept as NaN (:mod:`sigmatau.core.gaps`).
     """
     float_array = isinstance(data, np.ndarray) and not np.issubdtype(data.dtype, np.integer)
     return derived(data, ("validated", remove_offset and not float_array),
-                   lambda: scale_to_unit(as_series(data, remove_offset=remove_offset)))
+                   lambda: scale_to_unit(as_series(data, remove_offset=remove_offset, gaps=True)))
 
 
 def _phase_of(stat: Statistic, series: np.ndarray, rate: float, dtype: str) -> np.ndarray:
@@ -247,6 +256,47 @@ def prepare_scaled(stat: Statistic, data: object, rate: object, data_type: objec
     return ScaledPhase(_phase_of(stat, series, rate_f, dtype), rate_f, dtype, k)
 
 
+@dataclass(frozen=True)
+class GappedPhase:
+    """A validated record with missing samples, as gap-free phase runs (:func:`gapped_phase`).
+
+    Attributes
+    ----------
+    runs : list of numpy.ndarray
+        The phase of each gap-free run (frequency runs integrated; linear trend
+        removed per run when the statistic ignores it), scaled by 2**-exponent.
+    rate, data_type, exponent
+        As in :class:`ScaledPhase`.
+    n_points : int
+        Phase points of the whole record, gaps included.
+    n_missing : int
+        Missing samples.
+    """
+
+    runs: list
+    rate: float
+    data_type: str
+    exponent: int
+    n_points: int
+    n_missing: int
+
+
+def gapped_phase(stat: Statistic, data: object, rate: object, data_type: object) -> Optional[GappedPhase]:
+    """The record as gap-free phase runs, or None when no sample is missing.
+
+    For statistics that call their kernels themselves (TheoBR, TheoH): with gaps they
+    pool their kernels over the runs (:func:`sigmatau.core.gaps.pooled_over_runs`).
+    """
+    _refuse_streamed(stat, data)
+    series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
+    missing = missing_mask(series)
+    if missing is None:
+        return None
+    plain = replace(stat, compute_freq=None)  # runs as phase, whatever the data type
+    runs = list(gap_free_runs(plain, series, missing, rate_f, dtype))
+    return GappedPhase(runs, rate_f, dtype, k, int(n_points), int(np.count_nonzero(missing)))
+
+
 def compute(
     stat: Statistic,
     data: object,
@@ -270,8 +320,11 @@ def compute(
     """
     series, rate_f, dtype, n_points, k = _validated(stat, data, rate, data_type)
     given = series
+    missing = missing_mask(series)
     use_freq = dtype == "freq" and stat.compute_freq is not None
-    if use_freq:
+    if missing is not None:
+        pass  # the gap path below works on the samples themselves
+    elif use_freq:
         series = series - series.mean() if stat.trend_invariant else series
     else:
         series = _phase_of(stat, series, rate_f, dtype)
@@ -290,7 +343,11 @@ def compute(
     )
     tau0 = 1.0 / rate_f
     kernel = stat.compute_freq if use_freq else stat.compute
-    if ms.size:
+    n_eff = None
+    if missing is not None:
+        var, n, n_eff = _with_gaps(stat, series, missing, rate_f, dtype, ms)
+        ms, var, n, n_eff = drop_empty_factors(stat.name, ms, var, n, n_eff, explicit=m is not None or not isinstance(taus, str))
+    elif ms.size:
         var, n = kernel(series, ms, tau0)
     else:
         var, n = np.empty(0), np.empty(0, dtype=np.int64)
@@ -308,4 +365,70 @@ def compute(
         data_type=dtype,
         n_points=int(n_points),
     )
+    if missing is not None:
+        result = replace(result, n_missing=int(np.count_nonzero(missing)), n_effective=n_eff)
     return result, given
+
+
+def _with_gaps(stat: Statistic, series: np.ndarray, missing: np.ndarray, rate: float, dtype: str,
+               ms: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(var, n, n_equivalent)`` of ``stat`` on scaled samples with NaN gaps (:mod:`sigmatau.core.gaps`)."""
+    tau0 = 1.0 / rate
+    if ms.size == 0:
+        empty = np.empty(0, dtype=np.int64)
+        return np.empty(0), empty, empty
+    own = stat.freq_gaps if dtype == "freq" else stat.phase_gaps
+    if own is not None:
+        if dtype == "freq":
+            samples = series - np.nanmean(series) if stat.trend_invariant else series
+        else:
+            samples = detrended_phase(series) if stat.trend_invariant else series
+        return own(samples, ms, tau0)
+    runs = gap_free_runs(stat, series, missing, rate, dtype)
+    use_freq = dtype == "freq" and stat.compute_freq is not None
+    kernel = stat.compute_freq if use_freq else stat.compute
+    extra = 1 if use_freq else 0  # a kernel on y of L samples sees L + 1 phase points
+    return pooled_over_runs(kernel, runs, lambda size: size + extra, stat.max_m, _run_minimum(stat), ms, tau0,
+                            pooling=stat.pooling, terms_per_point=stat.terms_per_point)
+
+
+def _run_minimum(stat: Statistic) -> int:
+    return stat.min_points if stat.min_run_points is None else stat.min_run_points
+
+
+def gap_free_runs(stat: Statistic, series: np.ndarray, missing: np.ndarray, rate: float,
+                  dtype: str) -> Iterator[np.ndarray]:
+    """The gap-free runs of validated samples, each in the form ``stat``'s ordinary kernel takes.
+
+    Frequency samples go to ``compute_freq`` (mean removed when the statistic ignores it) or are
+    integrated to phase; phase runs lose their linear trend when the statistic ignores it.
+    Runs are yielded one at a time, so only one is converted at once.
+    """
+    starts, stops = present_runs(missing)
+    extra = 1 if dtype == "freq" else 0
+    for a, b in zip(starts.tolist(), stops.tolist()):
+        if b - a + extra < _run_minimum(stat) or stat.max_m(b - a + extra) < stat.min_m:
+            continue
+        run = series[a:b]
+        if dtype == "freq" and stat.compute_freq is not None:
+            yield run - run.mean() if stat.trend_invariant else run
+        else:
+            yield _phase_from(stat.trend_invariant, run, rate, dtype)
+
+
+def drop_empty_factors(name: str, ms: np.ndarray, var: np.ndarray, n: np.ndarray, n_eff: np.ndarray, *,
+                       explicit: bool, allow_empty: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Drop the factors at which every term reads a gap; say so when the user asked for them.
+
+    Raises DataError when none is left (unless ``allow_empty``: one part of a hybrid statistic).
+    """
+    keep = np.asarray(n) > 0
+    if not keep.any() and not (allow_empty or ms.size == 0):
+        raise DataError(f"{name}: every term reads a missing sample (gap) at every averaging factor;"
+                        " the record has no gap-free stretch long enough")
+    if not keep.all() and explicit:
+        warnings.warn(
+            f"{name}: no gap-free term at m={ms[~keep].tolist()}; those factors are left out",
+            RangeWarning, stacklevel=caller_stacklevel(),
+        )
+    return ms[keep], np.asarray(var)[keep], np.asarray(n)[keep], np.asarray(n_eff)[keep]

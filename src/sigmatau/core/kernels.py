@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .driver import Statistic
+from .gaps import block_kernel, point_kernel, window_mean_kernel
 from .taus import STOP_RATIOS
 from .numeric import WindowSums, centred_sumsq, sumsq, sumsq_combination
 
@@ -220,9 +221,16 @@ def _tvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var * (ms * tau0) ** 2 / 3.0, n
 
 
-STDVAR = Statistic("stdev", _stdvar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["stdev"], min_points=3, compute_freq=_stdvar_freq)
-OSTDVAR = Statistic("ostdev", _ostdvar_kernel, max_m=lambda n: n - 2, stop_ratio=STOP_RATIOS["ostdev"], min_points=3, compute_freq=_ostdvar_freq)
-AVAR = Statistic("adev", _avar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["adev"], min_points=3, compute_freq=_avar_freq)
-OAVAR = Statistic("oadev", oavar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["oadev"], min_points=3, compute_freq=_oavar_freq)
+STDVAR = Statistic("stdev", _stdvar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["stdev"], min_points=3,
+                   compute_freq=_stdvar_freq, phase_gaps=point_kernel((-1.0, 1.0), 1.0, blocks=True, centred=True),
+                   freq_gaps=block_kernel((1.0,), 1.0, centred=True))
+OSTDVAR = Statistic("ostdev", _ostdvar_kernel, max_m=lambda n: n - 2, stop_ratio=STOP_RATIOS["ostdev"], min_points=3,
+                    compute_freq=_ostdvar_freq, phase_gaps=point_kernel((-1.0, 1.0), 1.0, centred=True),
+                    freq_gaps=window_mean_kernel())
+AVAR = Statistic("adev", _avar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["adev"], min_points=3,
+                 compute_freq=_avar_freq, phase_gaps=point_kernel((1.0, -2.0, 1.0), 2.0, blocks=True),
+                 freq_gaps=block_kernel((1.0, -1.0), 2.0))
+OAVAR = Statistic("oadev", oavar_kernel, max_m=lambda n: (n - 1) // 2, stop_ratio=STOP_RATIOS["oadev"], min_points=3,
+                  compute_freq=_oavar_freq, phase_gaps=point_kernel((1.0, -2.0, 1.0), 2.0))
 MVAR = Statistic("mdev", _mvar_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["mdev"], min_points=3, compute_freq=_mvar_freq)
 TVAR = Statistic("tdev", _tvar_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["tdev"], min_points=3, compute_freq=_tvar_freq)

@@ -13,7 +13,7 @@ __all__ = ["StabilityResult"]
 
 _ARRAY_FIELDS = (
     "taus", "m", "var", "dev", "n", "bias_factor",
-    "alpha", "alpha_estimate", "edf", "ci_low", "ci_high",
+    "alpha", "alpha_estimate", "edf", "ci_low", "ci_high", "n_effective",
 )
 
 
@@ -49,6 +49,12 @@ class StabilityResult:
     alpha, alpha_estimate, edf, ci_low, ci_high, confidence, ci_reason
         Noise type (integer and fractional), equivalent degrees of freedom and
         the deviation interval at ``confidence``; ``None`` until filled.
+    n_missing : int
+        Samples of the input that were missing (NaN gaps, :mod:`sigmatau.core.gaps`);
+        ``n`` then counts only the terms whose samples are all present.
+    n_effective : numpy.ndarray or None
+        With gaps: at each τ, the phase points of a contiguous record that gives
+        ``n`` terms; the EDF is computed for it. None without gaps (``n_points``).
     """
 
     statistic: str
@@ -69,6 +75,8 @@ class StabilityResult:
     ci_high: Optional[np.ndarray] = None
     confidence: Optional[float] = None
     ci_reason: Optional[tuple[str, ...]] = None
+    n_missing: int = 0
+    n_effective: Optional[np.ndarray] = None
 
     def __post_init__(self) -> None:
         for name in _ARRAY_FIELDS:
@@ -126,7 +134,10 @@ class StabilityResult:
             rows.append(row)
         widths = [max(len(r[j]) for r in rows) for j in range(len(cols))]
         lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
-        title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points, bias: {self.bias}"
+        title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points"
+        if self.n_missing:
+            title += f", {self.n_missing} samples missing"
+        title += f", bias: {self.bias}"
         if self.confidence is not None:
             title += f", {100 * self.confidence:.1f} % interval"
         title += ")"

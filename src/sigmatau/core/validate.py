@@ -42,7 +42,7 @@ RATE_RANGE = (1e-24, 1e24)
 _EXACT_INT = 2**53
 
 
-def as_series(data: object, name: str = "data", *, remove_offset: bool = False) -> np.ndarray:
+def as_series(data: object, name: str = "data", *, remove_offset: bool = False, gaps: bool = False) -> np.ndarray:
     """Return ``data`` as a finite, 1-D float64 array (a copy is made when needed).
 
     Parameters
@@ -57,14 +57,20 @@ def as_series(data: object, name: str = "data", *, remove_offset: bool = False) 
         difference from the first value, correctly rounded to float64, instead of
         being rounded value by value (which loses every digit below 2**11 and can
         leave nothing of the noise). Any other data are only cast.
+    gaps : bool
+        Accept missing samples: NaN, and the masked values of a numpy masked
+        array (returned as NaN), the statistics' convention for gaps
+        (:mod:`sigmatau.core.gaps`). Infinite values are refused all the same.
 
     Raises
     ------
     DataError
-        When the data is not numeric, not 1-D, empty, holds NaN/inf or masked values.
+        When the data is not numeric, not 1-D, empty, holds inf, NaN or masked
+        values (NaN and masked values are accepted with ``gaps=True``, unless
+        every sample is missing).
     """
     if isinstance(data, np.ma.MaskedArray):
-        data = _unmasked(data, name)
+        data = _gaps_filled(data) if gaps else _unmasked(data, name)
     try:
         arr = np.asarray(data)
     except Exception:  # ragged lists and the like
@@ -86,7 +92,9 @@ def as_series(data: object, name: str = "data", *, remove_offset: bool = False) 
         return _exact_offset_free(arr)
     arr = np.asarray(arr, dtype=np.float64)
     finite = np.isfinite(arr)
-    if not finite.all():
+    if gaps and not finite.all():
+        _check_gaps(arr, finite, name)
+    elif not finite.all():
         bad = int(np.flatnonzero(~finite)[0])
         count = int((~finite).sum())
         raise DataError(
@@ -96,6 +104,30 @@ def as_series(data: object, name: str = "data", *, remove_offset: bool = False) 
     return arr
 
 
+def _check_gaps(arr: np.ndarray, finite: np.ndarray, name: str) -> None:
+    """Refuse infinite values and a record in which every sample is missing."""
+    inf = np.isinf(arr)
+    if inf.any():
+        bad = int(np.flatnonzero(inf)[0])
+        raise DataError(
+            f"{name} holds {int(inf.sum())} infinite value(s) (first at index {bad}: {float(arr[bad])});"
+            " a missing sample is NaN, an infinite one is an error in the data"
+        )
+    if not finite.any():
+        raise DataError(f"{name}: every one of its {arr.size} samples is missing (NaN)")
+
+
+def _gaps_filled(data: np.ma.MaskedArray) -> np.ndarray:
+    """The data of a masked array as float64 with NaN at the masked values (gaps)."""
+    mask = np.ma.getmaskarray(data)
+    values = np.ma.getdata(data)
+    if not mask.any():
+        return values
+    out = np.array(values, dtype=np.float64)
+    out[mask] = np.nan
+    return out
+
+
 def _unmasked(data: np.ma.MaskedArray, name: str) -> np.ndarray:
     """The data of a masked array in which nothing is masked; masked values are refused."""
     mask = np.ma.getmaskarray(data)
@@ -103,7 +135,7 @@ def _unmasked(data: np.ma.MaskedArray, name: str) -> np.ndarray:
         first = int(np.flatnonzero(mask.ravel())[0])
         raise DataError(
             f"{name} is a masked array with {int(mask.sum())} masked value(s) (first at flat index {first});"
-            " gaps are not supported: remove or fill them first (numpy.ma.compressed or .filled)"
+            " remove or fill them first (numpy.ma.compressed or .filled)"
         )
     return np.ma.getdata(data)
 
@@ -143,7 +175,7 @@ def scale_to_unit(v: np.ndarray) -> tuple[np.ndarray, int]:
     user's numbers, and no square or sum of squares of data near 1e±300 can
     overflow or underflow on the way.
     """
-    peak = float(np.max(np.abs(v))) if v.size else 0.0
+    peak = float(np.nanmax(np.abs(v))) if v.size else 0.0  # NaN: a missing sample (gap)
     if peak == 0.0:
         return v, 0
     k = math.frexp(peak)[1]

@@ -17,6 +17,7 @@ from ..core.validate import DataType
 from ..uncertainty.attach import CiMethod
 from ..uncertainty.confidence import ONE_SIGMA
 from ..core.numeric import sumsq_combination
+from ..core.gaps import block_kernel, point_kernel
 from ..core.kernels import block_sums_by_factor, window_sums_by_factor
 from .allan import _doc
 from ..core.result import StabilityResult
@@ -71,8 +72,11 @@ def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
-HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["hdev"], min_points=4, compute_freq=_hvar_freq)
-OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["ohdev"], min_points=4, compute_freq=_ohvar_freq)
+HVAR = Statistic("hdev", _hvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["hdev"], min_points=4,
+                 compute_freq=_hvar_freq, phase_gaps=point_kernel((-1.0, 3.0, -3.0, 1.0), 6.0, blocks=True),
+                 freq_gaps=block_kernel((1.0, -2.0, 1.0), 6.0))
+OHVAR = Statistic("ohdev", _ohvar_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["ohdev"], min_points=4,
+                  compute_freq=_ohvar_freq, phase_gaps=point_kernel((-1.0, 3.0, -3.0, 1.0), 6.0))
 
 
 @_doc

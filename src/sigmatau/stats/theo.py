@@ -32,7 +32,9 @@ from .engine import finish, run
 from ..core.validate import unscale_variance
 from ..core.validate import DataType
 from ..uncertainty.attach import CiMethod, check_options
-from ..core.kernels import oavar_kernel
+from ..core.driver import GappedPhase, drop_empty_factors
+from ..core.gaps import pooled_over_runs
+from ..core.kernels import OAVAR, oavar_kernel
 from .allan import _doc
 from ..uncertainty.confidence import ONE_SIGMA
 from ..uncertainty.noiseid import theo_noise_id
@@ -53,9 +55,13 @@ def _theo1_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     return var, (N - ms) * ms // 2
 
 
+def _theo1_terms_per_point(ms: np.ndarray) -> np.ndarray:
+    return np.asarray(ms, dtype=float) / 2.0  # n = (N - m)·m/2
+
+
 THEO1 = Statistic(
     "theo1", _theo1_kernel, max_m=lambda n: n - 1, stop_ratio=1, min_points=3,
-    min_m=2, even=True, tau_factor=0.75,
+    min_m=2, even=True, tau_factor=0.75, terms_per_point=_theo1_terms_per_point,
 )
 THEOBR = Statistic(
     "theobr", _theo1_kernel, max_m=lambda n: n - 1, stop_ratio=1, min_points=3,
@@ -177,6 +183,54 @@ def _kappa_text(k: TheoBRKappa) -> str:
     if k.block == 1:
         return f"theobr kappa={k.kappa:.6f} (n={k.n})"
     return f"theobr kappa={k.kappa:.6f} (n={k.n}, fast: blocks of {k.block} points)"
+
+
+# --- records with gaps: the kernels pooled over the gap-free runs --------------------
+
+
+def _theo1_runs(runs: list, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return pooled_over_runs(_theo1_kernel, runs, _points_of_run, THEO1.max_m, THEO1.min_points, ms, tau0,
+                            terms_per_point=_theo1_terms_per_point)
+
+
+def _oavar_runs(runs: list, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return pooled_over_runs(oavar_kernel, runs, _points_of_run, OAVAR.max_m, OAVAR.min_points, ms, tau0)
+
+
+def _points_of_run(size: int) -> int:
+    return size
+
+
+def _block_runs(runs: list, block: int) -> list:
+    """Each run averaged in blocks of ``block`` phase points on its own grid (Fast TheoBR)."""
+    return [r[: (r.size // block) * block].reshape(-1, block).mean(axis=1) for r in runs if r.size >= block]
+
+
+def _kappa_gaps(g: GappedPhase, method: str) -> TheoBRKappa:
+    """κ of a record with gaps: the ratios of OAVAR to Theo1 each pooled over the gap-free
+    runs (terms reading a gap are left out of both), averaged over the factors where both
+    have terms; Fast TheoBR averages each run in blocks first."""
+    N = g.n_points
+    _check_kappa_points(N)
+    block = 1 if method in ("exact", "run") else -(-N // KAPPA_FAST_POINTS)
+    runs = g.runs if block == 1 else _block_runs(g.runs, block)
+    n = _run_span(N) if method == "run" else (N // block) // 30 - 3
+    i = np.arange(max(n, 0) + 1)
+    oavar, n_a, _ = _oavar_runs(runs, 9 + 3 * i, 1.0)
+    theo, n_t, _ = _theo1_runs(runs, 12 + 4 * i, 1.0)
+    ok = (n_a > 0) & (n_t > 0)
+    if not ok.any():
+        raise DataError(
+            "TheoBR's bias factor κ needs a gap-free stretch of at least"
+            f" {13 * block} phase points; the gaps leave none"
+        )
+    oavar, theo = oavar[ok], theo[ok]
+    if np.all(theo <= 0.0) and np.all(oavar <= 0.0):
+        return TheoBRKappa(kappa=1.0, n=int(n), n_points=int(N), block=int(block))
+    if np.any(theo <= 0.0):
+        raise DataError("TheoBR's bias factor κ is undefined: Theo1 is zero at some m = 12+4i"
+                        " while the Allan variance is not")
+    return TheoBRKappa(kappa=float(np.mean(oavar / theo)), n=int(n), n_points=int(N), block=int(block))
 
 
 # --- Theo1 bias by noise type --------------------------------------------------------
@@ -349,6 +403,9 @@ def theobr_kappa(
     (1.085666, 30)
     """
     _check_kappa_method(method, "method")
+    gapped = _driver.gapped_phase(THEOBR, data, rate, data_type)
+    if gapped is not None:
+        return _kappa_gaps(gapped, method)
     # κ is a ratio of variances, so it is computed on the power-of-two-scaled phase.
     p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
     return _kappa(p.phase, method)
@@ -401,24 +458,36 @@ def theobr(
     """
     check_options(alpha, confidence, ci)
     method = _check_kappa_method(kappa)
-    # The kernels run on the phase scaled by 2**-k (prepare() refuses beyond 2**±450);
-    # var(c·x) = c²·var(x) and κ is scale free, so unscaling the variance is exact.
-    p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
-    x, rate_f, dtype = p.phase, p.rate, p.data_type
-    _check_kappa_points(x.size, dtype)
+    gapped = _driver.gapped_phase(THEOBR, data, rate, data_type)
+    if gapped is not None:
+        rate_f, dtype, N, exponent = gapped.rate, gapped.data_type, gapped.n_points, gapped.exponent
+    else:
+        # The kernels run on the phase scaled by 2**-k (prepare() refuses beyond 2**±450);
+        # var(c·x) = c²·var(x) and κ is scale free, so unscaling the variance is exact.
+        p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
+        x, rate_f, dtype, N, exponent = p.phase, p.rate, p.data_type, p.phase.size, p.exponent
+    _check_kappa_points(N, dtype)
     ms = select_m(
-        "theobr", n_points=x.size, rate=rate_f, taus=taus, m=m, points_per_decade=points_per_decade,
-        m_min=THEOBR.min_m, m_max=THEOBR.max_m(x.size), stop_ratio=THEOBR.stop_ratio, even=True,
+        "theobr", n_points=N, rate=rate_f, taus=taus, m=m, points_per_decade=points_per_decade,
+        m_min=THEOBR.min_m, m_max=THEOBR.max_m(N), stop_ratio=THEOBR.stop_ratio, even=True,
         tau_factor=0.75,
     )
-    kap = _kappa(x, method)
     tau0 = 1.0 / rate_f
-    raw, n = _theo1_kernel(x, ms, tau0) if ms.size else (np.empty(0), np.empty(0, dtype=np.int64))
-    var = unscale_variance(np.maximum(kap.kappa * raw, 0.0), p.exponent, "theobr")
+    n_eff = None
+    if gapped is not None:
+        kap = _kappa_gaps(gapped, method)
+        raw, n, n_eff = _theo1_runs(gapped.runs, ms, tau0)
+        ms, raw, n, n_eff = drop_empty_factors("theobr", ms, raw, n, n_eff,
+                                               explicit=m is not None or not isinstance(taus, str))
+    else:
+        kap = _kappa(x, method)
+        raw, n = _theo1_kernel(x, ms, tau0) if ms.size else (np.empty(0), np.empty(0, dtype=np.int64))
+    var = unscale_variance(np.maximum(kap.kappa * raw, 0.0), exponent, "theobr")
     result = StabilityResult(
         statistic="theobr", taus=0.75 * ms * tau0, m=ms, var=var, dev=np.sqrt(var), n=n,
-        rate=rate_f, data_type=dtype, n_points=int(x.size), bias=_kappa_text(kap),
+        rate=rate_f, data_type=dtype, n_points=int(N), bias=_kappa_text(kap),
         bias_factor=np.full(ms.size, 1.0 / kap.kappa),
+        n_missing=0 if gapped is None else gapped.n_missing, n_effective=n_eff,
     )
     return finish(result, data, dtype, alpha=alpha, confidence=confidence, ci=ci,
                   identified=_kappa_noise(kap, ms))
@@ -565,6 +634,28 @@ def _theobr_rows(x: np.ndarray, mb: np.ndarray, tau0: float, block: int,
     return block * mp, vb, nb
 
 
+def _theobr_rows_gaps(g: GappedPhase, mb: np.ndarray, tau0: float, block: int, m_lo: int,
+                      explicit: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_theobr_rows` for a record with gaps: Theo1 pooled over the gap-free runs (each
+    averaged in blocks on its own grid for Fast TheoBR); also returns the equivalent
+    contiguous record length of each row, in phase points of the original record."""
+    if mb.size == 0:
+        empty = np.empty(0, dtype=np.int64)
+        return empty, np.empty(0), empty, empty
+    if block == 1:
+        return drop_empty_factors("theoh", mb, *_theo1_runs(g.runs, mb, tau0), explicit=explicit, allow_empty=True)
+    averaged = _block_runs(g.runs, block)
+    lowest = 2 * (-(-m_lo // (2 * block)))
+    mp = np.unique(np.maximum(2 * np.round(mb / (2.0 * block)).astype(np.int64), lowest))
+    mp = mp[mp <= g.n_points // block - 1]
+    if mp.size == 0:
+        empty = np.empty(0, dtype=np.int64)
+        return empty, np.empty(0), empty, empty
+    mp, vb, nb, neb = drop_empty_factors("theoh", mp, *_theo1_runs(averaged, mp, block * tau0), explicit=explicit,
+                                         allow_empty=True)
+    return block * mp, vb, nb, neb * block
+
+
 @_doc
 def theoh(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
@@ -630,15 +721,17 @@ def theoh(
     check_options(alpha, confidence, ci)
     kappa_method = _check_kappa_method(kappa)
     theoh_method = _check_theoh_method(method)
-    # Scaled phase as in theobr(); the variance is unscaled before the low/high split.
-    p = _driver.prepare_scaled(THEOH, data, rate, data_type)
-    x, rate_f, dtype = p.phase, p.rate, p.data_type
-    N = x.size
+    gapped = _driver.gapped_phase(THEOH, data, rate, data_type)
+    if gapped is not None:
+        rate_f, dtype, N, exponent = gapped.rate, gapped.data_type, gapped.n_points, gapped.exponent
+    else:
+        # Scaled phase as in theobr(); the variance is unscaled before the low/high split.
+        p = _driver.prepare_scaled(THEOH, data, rate, data_type)
+        x, rate_f, dtype, N, exponent = p.phase, p.rate, p.data_type, p.phase.size, p.exponent
     _check_kappa_points(N, dtype)
     tau0 = 1.0 / rate_f
     ma, mb = _theoh_factors(N, rate_f, taus, m, points_per_decade)
-    kap = _kappa(x, kappa_method)
-    va, na = oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
+    kap = _kappa(x, kappa_method) if gapped is None else _kappa_gaps(gapped, kappa_method)
     block = _theoh_block(N) if theoh_method == "fast" else 1
     declined = block > 1 and bool(theo_noise_id(kap.kappa) >= 1)
     if declined:
@@ -646,9 +739,20 @@ def theoh(
         # (docs/theoh-fast.md). κ says the record is PM-dominated: the exact rows instead.
         block = 1
     k, m_lo = theoh_split(N)
-    mb, vb, nb = _theobr_rows(x, mb, tau0, block, m_lo)
+    nea = neb = None
+    if gapped is None:
+        va, na = oavar_kernel(x, ma, tau0) if ma.size else (np.empty(0), np.empty(0, dtype=np.int64))
+        mb, vb, nb = _theobr_rows(x, mb, tau0, block, m_lo)
+    else:
+        explicit = m is not None or not isinstance(taus, str)
+        ma, va, na, nea = drop_empty_factors("theoh", ma, *_oavar_runs(gapped.runs, ma, tau0), explicit=explicit,
+                                            allow_empty=True)
+        mb, vb, nb, neb = _theobr_rows_gaps(gapped, mb, tau0, block, m_lo, explicit)
+        if ma.size + mb.size == 0:
+            raise DataError("theoh: every term reads a missing sample (gap) at every averaging factor;"
+                            " the record has no gap-free stretch long enough")
     var = np.concatenate((np.asarray(va, dtype=float), kap.kappa * vb))
-    var = unscale_variance(np.where(var < 0.0, 0.0, var), p.exponent, "theoh")
+    var = unscale_variance(np.where(var < 0.0, 0.0, var), exponent, "theoh")
     bias = (
         f"theoh: oavar for tau < {k * tau0:g} s (m < {k}); {_kappa_text(kap)} for tau >= {k * tau0:g} s"
         f" (even m >= {m_lo}, tau = 0.75 m tau0)"
@@ -657,13 +761,14 @@ def theoh(
         bias += f"; fast theobr on blocks of {block} points (m = {block}·even m')"
     elif declined:
         bias += "; exact theobr (kappa indicates phase noise, which block averages would remove)"
-    common = dict(rate=rate_f, data_type=dtype, n_points=int(N), bias=bias)
+    common = dict(rate=rate_f, data_type=dtype, n_points=int(N), bias=bias,
+                  n_missing=0 if gapped is None else gapped.n_missing)
     # Each part gets the EDF of its own estimator: Greenhall's OAVAR EDF with the
     # noise identified at m below k, the Theo1 EDF with the noise type from κ above.
     low = StabilityResult(statistic="oadev", taus=ma * tau0, m=ma, var=var[: ma.size],
-                          dev=np.sqrt(var[: ma.size]), n=na, **common)
+                          dev=np.sqrt(var[: ma.size]), n=na, n_effective=nea, **common)
     high = StabilityResult(statistic="theoh", taus=0.75 * mb * tau0, m=mb, var=var[ma.size:],
-                           dev=np.sqrt(var[ma.size:]), n=nb, **common)
+                           dev=np.sqrt(var[ma.size:]), n=nb, n_effective=neb, **common)
     low = finish(low, data, dtype, alpha=alpha, confidence=confidence, ci=ci)
     high = finish(high, data, dtype, alpha=alpha, confidence=confidence, ci=ci,
                   identified=_kappa_noise(kap, mb))
@@ -683,6 +788,7 @@ def theoh(
         dev=np.sqrt(var),
         n=np.concatenate((na, nb)).astype(np.int64),
         bias_factor=np.concatenate((np.ones(ma.size), np.full(mb.size, 1.0 / kap.kappa))),
+        n_effective=None if gapped is None else np.concatenate((nea, neb)).astype(np.int64),
         confidence=low.confidence if low.confidence is not None else high.confidence,
         ci_reason=reasons,
         **common,

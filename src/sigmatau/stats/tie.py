@@ -13,6 +13,7 @@ from typing import Optional
 import numpy as np
 
 from ..core.driver import Statistic
+from ..core.gaps import point_kernel
 from .engine import run
 from ..core import numeric as _numeric
 from ..core.validate import DataType
@@ -120,10 +121,12 @@ def _tierms_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
 
 
 MTIE = Statistic(
-    "mtie", _mtie_kernel, max_m=lambda n: n - 1, stop_ratio=2, min_points=3, trend_invariant=False,
+    "mtie", _mtie_kernel, max_m=lambda n: n - 1, stop_ratio=2, min_points=3, trend_invariant=False, pooling="max",
+    min_run_points=2,
 )
 TIERMS = Statistic(
     "tierms", _tierms_kernel, max_m=lambda n: n - 1, stop_ratio=4, min_points=3, trend_invariant=False,
+    phase_gaps=point_kernel((-1.0, 1.0), 1.0, per_tau=False), min_run_points=2,
 )
 
 

@@ -34,6 +34,7 @@ from typing import Literal, Optional
 import numpy as np
 
 from ..core.driver import Statistic
+from ..core.gaps import equivalent_points, nan_terms_variance
 from ..core.taus import STOP_RATIOS
 from .engine import finish, run
 from ..core.numeric import CHUNK
@@ -103,6 +104,22 @@ def _totvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarr
     for i, m in enumerate(ms):
         var[i] = _totvar_sum(x, int(m), bufs) / (2.0 * (m * tau0) ** 2 * (n_pts - 2))
     return var, np.full(ms.size, n_pts - 2, dtype=np.int64)
+
+
+def _totvar_gaps(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """TOTVAR of phase with gaps (NaN): the record extended by reflection at its two ends
+    (a reflected point is missing when its source or the mirror point is), each term
+    ``x*_{i-m} − 2x*_i + x*_{i+m}``, i = 1 … N-2, used when its three points are present."""
+    n_pts = x.size
+    inner = x[n_pts - 2 : 0 : -1]
+    ext = np.concatenate((2.0 * x[0] - inner, x, 2.0 * x[-1] - inner))
+    off = n_pts - 2
+    var, n, neq = np.empty(ms.size), np.zeros(ms.size, dtype=np.int64), np.zeros(ms.size, dtype=np.int64)
+    for k, m in enumerate(ms.tolist()):
+        t = ext[off + 1 - m : off + n_pts - 1 - m] - 2.0 * ext[off + 1 : off + n_pts - 1] + ext[off + 1 + m : off + n_pts - 1 + m]
+        var[k], n[k] = nan_terms_variance(t, 2.0 * (m * tau0) ** 2)
+        neq[k] = equivalent_points(n_pts, n_pts - 2, int(n[k]))
+    return var, n, neq
 
 
 class _TotvarBuffers:
@@ -239,7 +256,8 @@ def _htot_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray
     return var, n
 
 
-TOTVAR = Statistic("totdev", _totvar_kernel, max_m=lambda n: n - 1, stop_ratio=STOP_RATIOS["totdev"], min_points=3)
+TOTVAR = Statistic("totdev", _totvar_kernel, max_m=lambda n: n - 1, stop_ratio=STOP_RATIOS["totdev"], min_points=3,
+                   phase_gaps=_totvar_gaps)
 MTOT = Statistic("mtotdev", _mtot_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["mtotdev"], min_points=3)
 TTOT = Statistic("ttotdev", _ttot_kernel, max_m=lambda n: n // 3, stop_ratio=STOP_RATIOS["ttotdev"], min_points=3)
 HTOT = Statistic("htotdev", _htot_kernel, max_m=lambda n: (n - 1) // 3, stop_ratio=STOP_RATIOS["htotdev"], min_points=4)

@@ -138,11 +138,12 @@ def attach(
     if not has_edf:
         edf_reasons = [f"no published EDF for {result.statistic}"] * n_rows
     elif known.any():
-        vals, why = edf_array(result.statistic, a[known].astype(np.int64), result.m[known],
-                              result.n_points, return_reason=True, unsupported="nan")
-        nu[known] = vals
-        for i, w in zip(np.flatnonzero(known), why):
-            edf_reasons[i] = w
+        for rows, n_points in _rows_by_points(result, known):
+            vals, why = edf_array(result.statistic, a[rows].astype(np.int64), result.m[rows],
+                                  n_points, return_reason=True, unsupported="nan")
+            nu[rows] = vals
+            for i, w in zip(rows, why):
+                edf_reasons[i] = w
     low = np.full(n_rows, np.nan)
     high = np.full(n_rows, np.nan)
     if ci == "simple":
@@ -173,6 +174,16 @@ def attach(
         confidence=confidence,
         ci_reason=tuple(edf_reasons),
     )
+
+
+def _rows_by_points(result: StabilityResult, rows: np.ndarray) -> list[tuple[np.ndarray, int]]:
+    """The selected rows grouped by the record length their EDF is computed for: ``n_points``,
+    or with gaps each row's equivalent contiguous length (``result.n_effective``)."""
+    idx = np.flatnonzero(rows)
+    if result.n_effective is None:
+        return [(idx, result.n_points)]
+    points = np.asarray(result.n_effective)[idx]
+    return [(idx[points == p], int(p)) for p in np.unique(points)]
 
 
 def _below(value: float, limit: float) -> str:

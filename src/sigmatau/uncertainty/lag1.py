@@ -10,6 +10,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
+from ..core.gaps import missing_mask
 from ..core.numeric import block_means, dot, sumsq
 from ..core.shared import memoized
 from ..core.validate import as_series, check_data_type
@@ -51,8 +52,15 @@ class Lag1Result:
     n: int
 
 
-def _lag1_r1(z: np.ndarray, acf: str = "standard") -> float:
-    """Sample lag-1 autocorrelation of ``z`` (times ``(n−1)/n`` for ``acf="stable32"``)."""
+def _lag1_r1(z: np.ndarray, acf: str = "standard", gaps: bool = False) -> float:
+    """Sample lag-1 autocorrelation of ``z`` (times ``(n−1)/n`` for ``acf="stable32"``).
+
+    With ``gaps``, NaN marks a missing point: the mean and the denominator use the
+    n points present, the numerator the pairs of neighbours both present, scaled by
+    (n − 1)/pairs so that it weighs as in a complete series of n points.
+    """
+    if gaps:
+        return _lag1_r1_gaps(z, acf)
     zc = z - z.mean()
     den = sumsq(zc)
     if den == 0.0:
@@ -61,11 +69,28 @@ def _lag1_r1(z: np.ndarray, acf: str = "standard") -> float:
     return r1 * (z.size - 1) / z.size if acf == "stable32" else r1
 
 
+def _lag1_r1_gaps(z: np.ndarray, acf: str) -> float:
+    present = ~np.isnan(z)
+    n = int(np.count_nonzero(present))
+    zc = np.where(present, z - np.nanmean(z), 0.0) if n else z
+    den = sumsq(zc)
+    if n < 2 or den == 0.0:
+        raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
+    # a missing point is 0 after centring, so a pair with one contributes nothing; the
+    # n_pairs present replace the n − 1 of a complete series
+    pairs = int(np.count_nonzero(present[:-1] & present[1:]))
+    if pairs == 0:
+        raise InsufficientDataError("no two neighbouring points are both present at this averaging factor")
+    r1 = dot(zc[:-1], zc[1:]) / den * (n - 1) / pairs
+    return r1 * (n - 1) / n if acf == "stable32" else r1
+
+
 def _detrend(data: np.ndarray, data_type: str) -> np.ndarray:
-    """Remove a least-squares quadratic (phase) or line (frequency)."""
+    """Remove a least-squares quadratic (phase) or line (frequency), fitted to the points present."""
     t = np.linspace(-1.0, 1.0, data.size)
     deg = 2 if data_type == "phase" else 1
-    return data - np.polyval(np.polyfit(t, data, deg), t)
+    ok = ~np.isnan(data)
+    return data - np.polyval(np.polyfit(t[ok], data[ok], deg), t)
 
 
 def lag1_acf_noise_id(
@@ -153,7 +178,7 @@ def lag1_acf_noise_id(
     0
     """
     dtype = check_data_type(data_type)
-    series = as_series(data)
+    series = as_series(data, gaps=True)
     m = _check_m(m)
     dmin, dmax = _check_d(dmin, dmax)
     if acf not in ("standard", "stable32"):
@@ -180,9 +205,11 @@ def lag1_of_series(series: np.ndarray, m: int, *, data_type: str, dmin: int, dma
             f" got {n} from {series.size} {data_type} samples"
         )
     diffs = _Differences(series, data_type, m, detrend, min_points)
+    gaps = missing_mask(series) is not None
 
     def r1_at(d: int) -> float:
-        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf), lambda: _lag1_r1(diffs.at(d), acf))
+        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
+                        lambda: _lag1_r1(diffs.at(d), acf, gaps))
 
     theta = 1 if data_type == "phase" else 0
     d, delta, r1 = _difference_until_white(r1_at, m, dmin, dmax)
@@ -224,8 +251,12 @@ def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_
     if detrend and series.size > 3:
         series = _detrend(series, dtype)
     # m = 1: the series itself (a mean of one value is that value; no record-sized copy)
+    gaps = missing_mask(series) is not None
+    # a block holding a gap is missing (its mean from fewer samples would break the telescoping
+    # sums of phase-like noise, α ≥ 1, and read as white)
     z = series if m == 1 else (series[::m] if dtype == "phase" else block_means(series, m))
-    n = int(z.size)
+    # with gaps (NaN) only the points present count
+    n = int(np.count_nonzero(~np.isnan(z))) if gaps else int(z.size)
     if n < min_points:
         raise InsufficientDataError(
             f"lag-1 noise identification needs at least {min_points} points at m={m},"

@@ -220,7 +220,7 @@ def identify(
     """
     dtype = check_data_type(data_type)
     rate_f = check_rate(rate)
-    series = as_series(data)
+    series = as_series(data, gaps=True)
     fam = _check_family(family)
     m_list = _check_factors(ms)
     dmax, lo, hi = FAMILY_RULES[fam]

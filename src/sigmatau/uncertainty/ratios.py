@@ -102,7 +102,7 @@ def b1_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
     numerics.md §1.1, §5.3; W. J. Riley, NIST SP 1065 (2008) §5.6.
     """
     dtype = check_data_type(data_type)
-    series = as_series(data)
+    series = as_series(data, gaps=True)
     m = _check_m(m)
     return b1_observed(_frequency(series, dtype), m)[0]
 
@@ -110,6 +110,8 @@ def b1_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
 def b1_observed(y: np.ndarray, m: int) -> tuple[float, int]:
     """Observed B1 ratio of frequency samples ``y`` at ``m`` and the number of averages ``Nb``."""
     means = block_means(y, m)
+    if np.isnan(means).any():
+        return _b1_observed_gaps(means, m)
     nb = int(means.size)
     if nb < 2:
         raise InsufficientDataError(f"the B1 ratio needs at least 2 averages at m={m}, got {nb}")
@@ -119,6 +121,22 @@ def b1_observed(y: np.ndarray, m: int) -> tuple[float, int]:
     if avar == 0.0:
         raise DataError(f"the Allan variance is zero at m={m}; the B1 ratio is undefined")
     return s2 / avar, nb
+
+
+def _b1_observed_gaps(means: np.ndarray, m: int) -> tuple[float, int]:
+    """B1 from block means some of which are missing (NaN: the block holds a gap): the
+    variance of the means present over the Allan variance of the neighbouring pairs present."""
+    ok = means[~np.isnan(means)]
+    dif = np.diff(means)
+    dif = dif[~np.isnan(dif)]
+    nb = int(ok.size)
+    if nb < 2 or dif.size == 0:
+        raise InsufficientDataError(f"the B1 ratio needs at least 2 averages (and a pair of neighbours) at m={m},"
+                                    f" got {nb} outside the gaps")
+    avar = float(np.dot(dif, dif)) / (2.0 * dif.size)
+    if avar == 0.0:
+        raise DataError(f"the Allan variance is zero at m={m}; the B1 ratio is undefined")
+    return float(ok.var(ddof=1)) / avar, nb
 
 
 @dataclass(frozen=True)
@@ -242,7 +260,7 @@ def b1_noise_id(
     numerics.md §5.3.
     """
     dtype = check_data_type(data_type)
-    series = as_series(data)
+    series = as_series(data, gaps=True)
     m = _check_m(m)
     if n_expected is not None:
         n_expected = _check_count(n_expected, "n_expected")
@@ -355,7 +373,7 @@ def rn_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
     numerics.md §5.4.
     """
     dtype = check_data_type(data_type)
-    series = as_series(data)
+    series = as_series(data, gaps=True)
     m = _check_m(m)
     npts = series.size if dtype == "phase" else series.size + 1
     if npts < 3 * m:

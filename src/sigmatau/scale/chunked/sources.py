@@ -405,7 +405,8 @@ def _scan(src: ChunkedSeries) -> float:
     if bad:
         i, value = bad[0]
         raise DataError(
-            f"{src.name} holds {count[0]} non-finite value(s) (first at index {i}: {value}); remove or fill them first"
+            f"{src.name} holds {count[0]} non-finite value(s) (first at index {i}: {value}); the chunked path does"
+            " not take missing samples (NaN gaps) yet: load the record in memory, or fill them first"
         )
     src._scan, src._peak = total, peak[0]
     return total
