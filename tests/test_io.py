@@ -425,14 +425,43 @@ def test_jitter_is_measured(tmp_path):
     assert "jitter: rms" in log.timing.summary()
 
 
-def test_gap_refused_by_default_with_position(tmp_path):
+def test_gap_marked_by_default_and_refused_on_request(tmp_path):
     t = np.concatenate([np.arange(300) * 0.01, 3.5 + np.arange(200) * 0.01])
     p = _timed(tmp_path, t)
+    # 50 of 550 samples missing (9.1 %): placed on the grid as NaN gaps
+    log = io.read(p)
+    assert len(log) == 550 and log.timing.gaps_policy == "mark"
+    x = log["gyro_x"]
+    assert np.isnan(x[300:350]).all() and not np.isnan(x[:300]).any() and not np.isnan(x[350:]).any()
+    np.testing.assert_array_equal(x[350:], np.arange(300, 500))
+    np.testing.assert_allclose(np.diff(log.timestamps), 0.01, atol=1e-9)
+    g = log.timing.gaps[0]
+    assert (g.index, g.missing) == (350, 50)
+    assert "50 samples missing (9.09 % of the 550)" in log.timing.summary()
+    assert [len(s) for s in log.segments()] == [300, 200]
     with pytest.raises(DataError) as e:
-        io.read(p)
+        io.read(p, gaps="refuse")
     _check(e, DataError, "t.csv", r"1 gap\(s\)", r"0\.51 s after 2\.99 s", "before sample 300",
-           "50 samples missing", r"--gaps split \(gaps='split' in Python\)",
+           "50 samples missing", r"--gaps mark \(gaps='mark' in Python\)", r"--gaps split \(gaps='split' in Python\)",
            r"--gaps ignore \(gaps='ignore' in Python\)")
+
+
+def test_gaps_beyond_the_share_are_refused_and_short_ones_held(tmp_path):
+    t = np.concatenate([np.arange(300) * 0.01, 5.0 + np.arange(200) * 0.01])
+    with pytest.raises(DataError) as e:
+        io.read(_timed(tmp_path, t))
+    _check(e, DataError, "200 samples missing", r"28\.6 % of the samples", "up to 10 %",
+           r"--gaps mark \(gaps='mark' in Python\)")
+    assert len(_quiet_read(_timed(tmp_path, t), gaps="mark")) == 700
+    # gaps of at most AUTO_HOLD_SAMPLES samples hold the sample before them; longer ones are NaN
+    t = np.delete(np.arange(400) * 0.01, [10, 11, 100, 101, 102, 103, 104, 105])
+    log = io.read(_timed(tmp_path, t, values=np.arange(t.size, dtype=float)))
+    x = log["gyro_x"]
+    assert len(log) == 400 and x[10] == x[11] == x[9] == 9.0 and np.isnan(x[100:106]).all()
+    assert [(g.index, g.missing) for g in log.timing.gaps] == [(106, 6)]
+    assert any("held the sample before each of 1 gap(s)" in a for a in log.timing.actions)
+    marked = _quiet_read(_timed(tmp_path, t, values=np.arange(t.size, dtype=float)), gaps="mark")
+    assert np.isnan(marked["gyro_x"][10:12]).all() and len(marked.timing.gaps) == 2
 
 
 def test_gap_split_and_ignore(tmp_path):
@@ -722,7 +751,7 @@ def test_no_time_column_and_no_rate(tmp_path):
 
 @pytest.mark.parametrize("kw, pattern", [
     ({"format": "xls"}, r"format='xls' is not a known format; formats are: csv"),
-    ({"gaps": "fill"}, r"gaps='fill' must be one of \('refuse', 'split', 'ignore'\)"),
+    ({"gaps": "fill"}, r"gaps='fill' must be one of \('auto', 'mark', 'refuse', 'split', 'ignore'\)"),
     ({"unsorted": "keep"}, r"unsorted='keep' must be one of"),
     ({"duplicates": "mean"}, r"duplicates='mean' must be one of"),
     ({"stamps": "sensor"}, r"stamps='sensor' must be one of"),

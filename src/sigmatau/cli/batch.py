@@ -57,8 +57,9 @@ def add_cli(subparsers: Any) -> None:
     g.add_argument("--dataset", help="HDF5: the dataset or group")
     g.add_argument("--stamps", choices=["header", "bag"], help="ROS bags: header.stamp (default) or receive time")
     g.add_argument("--delimiter", help="text files: the field delimiter")
-    g.add_argument("--gaps", choices=["refuse", "split", "ignore"], default="refuse",
-                   help="missing samples: refuse (default), split (longest segment) or ignore")
+    g.add_argument("--gaps", choices=["auto", "mark", "refuse", "split", "ignore"], default="auto",
+                   help="missing samples: auto (default: mark up to 10%%, else refuse), mark (gaps every"
+                        " statistic skips), refuse, split (longest segment) or ignore")
     g.add_argument("--gap-threshold", type=float, default=1.5, help="gap: a step above this many median steps")
     g.add_argument("--unsorted", choices=["sort", "refuse"], default="sort", help="timestamps going backwards")
     g.add_argument("--duplicates", choices=["drop", "refuse"], default="drop", help="repeated timestamps")

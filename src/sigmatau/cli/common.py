@@ -150,9 +150,11 @@ def _add_input_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--stamps", choices=["header", "bag"], help="ROS bags: header.stamp (default) or receive time")
     g.add_argument("--delimiter", help="text files: the field delimiter (default: detected)")
     t = p.add_argument_group("timing policies")
-    t.add_argument("--gaps", choices=["refuse", "split", "ignore"], default="refuse",
-                   help="missing samples: refuse (default, the message says where), split (analyse the longest"
-                        " gap-free segment) or ignore (analyse as if evenly spaced)")
+    t.add_argument("--gaps", choices=["auto", "mark", "refuse", "split", "ignore"], default="auto",
+                   help="missing samples: auto (default: mark them when at most 10%% are missing, else refuse),"
+                        " mark (place the samples on the time grid, each missing one a gap that every statistic"
+                        " skips), refuse (the message says where), split (analyse the longest gap-free segment)"
+                        " or ignore (analyse as if evenly spaced)")
     t.add_argument("--gap-threshold", type=float, default=1.5, help="a gap is a step longer than this many"
                                                                      " median steps (default 1.5)")
     t.add_argument("--unsorted", choices=["sort", "refuse"], default="sort",

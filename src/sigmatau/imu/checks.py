@@ -33,6 +33,7 @@ from typing import Any, Optional
 import numpy as np
 
 from ..core.validate import as_series, check_rate
+from ..core.gaps import present_runs
 from ..errors import ParameterError, SigmaTauWarning
 
 __all__ = [
@@ -194,7 +195,8 @@ def estimate_lsb(samples: object, *, max_levels_fraction: float = 0.25) -> Optio
     >>> estimate_lsb(np.random.default_rng(0).normal(size=5000)) is None
     True
     """
-    x = as_series(samples, "samples")
+    x = as_series(samples, "samples", gaps=True)
+    x = x[~np.isnan(x)]  # missing samples (gaps) hold no level
     u = np.unique(x)
     if u.size > max(16, max_levels_fraction * x.size):
         return None
@@ -420,17 +422,21 @@ def check_samples(
     >>> round(c.lsb, 3), c.coarse
     (0.05, False)
     """
-    x = as_series(samples, "samples")
+    x = as_series(samples, "samples", gaps=True)
     rate_f = check_rate(rate)
     u = f" {unit}" if unit else ""
     found = _Findings()
-    n = x.size
-    std = float(x.std(ddof=1)) if n > 1 else 0.0
-    q = _check_quantisation(x, rate_f, lsb, std, u, found)
-    ratio, rolloff = _check_spectrum(x, rate_f, q.n_levels, found)
+    # Missing samples (NaN gaps): the checks of values read the samples present, the
+    # spectrum the longest gap-free run.
+    present = x[~np.isnan(x)]
+    contiguous = x if present.size == x.size else _longest_run(x)
+    n = present.size
+    std = float(present.std(ddof=1)) if n > 1 else 0.0
+    q = _check_quantisation(present, rate_f, lsb, std, u, found)
+    ratio, rolloff = _check_spectrum(contiguous, rate_f, q.n_levels, found)
     dec = _check_decimation(odr, rate_f, rolloff, found)
-    saturated = _check_saturation(x, q, full_scale, u, found)
-    runs = _check_runs(x, q, rate_f, found)
+    saturated = _check_saturation(present, q, full_scale, u, found)
+    runs = _check_runs(present, q, rate_f, found)
     if warn:
         for cls, msg in found.issued:
             warnings.warn(msg, cls, stacklevel=2)
@@ -442,6 +448,13 @@ def check_samples(
         repeated_fraction=runs.repeated, findings=tuple(found.findings),
         warned=tuple((cls.__name__, msg) for cls, msg in found.issued),
     )
+
+
+def _longest_run(x: np.ndarray) -> np.ndarray:
+    """The longest stretch of ``x`` without a missing sample (NaN)."""
+    starts, stops = present_runs(np.isnan(x))
+    i = int(np.argmax(stops - starts))
+    return x[starts[i]:stops[i]]
 
 
 class _Findings:

@@ -322,7 +322,7 @@ def _curve_of_samples(samples: Any, *, rate: Optional[float], unit: str, scale: 
     sc = float(scale)
     if not (math.isfinite(sc) and sc > 0):
         raise ParameterError(f"scale={scale!r} must be a positive number")
-    y = as_series(samples, "samples")
+    y = as_series(samples, "samples", gaps=True)  # NaN: missing samples, gaps every statistic skips
     if sc != 1.0:  # at scale 1 the caller's own array goes on (read, never written), shared with the
         y = y * sc  # other statistics of its channel (sigmatau.core.shared)
     if increments:
@@ -343,7 +343,7 @@ def _curve_of_samples(samples: Any, *, rate: Optional[float], unit: str, scale: 
         for cls, msg in data_checks.warned:
             quantized = cls == "QuantizationWarning"
             flags.append(Flag("quantized" if quantized else "data", "N" if quantized else "", msg))
-    if np.ptp(y) == 0:
+    if np.nanmax(y) == np.nanmin(y):
         raise DataError("all samples are equal: no noise to analyse")
     result = oadev(y, rate=rate_f, taus=taus, confidence=conf, ci="chi2")
     return result, rate_f, n_samples, data_checks, flags

@@ -204,7 +204,7 @@ class SensorLog:
         """The gap-free runs of samples, each as a log of its own.
 
         The log is split at every gap of ``timing.gaps`` (whatever the gap policy
-        was); runs shorter than ``min_samples`` are left out. Without gaps the
+        was; a marked log loses its missing samples); runs shorter than ``min_samples`` are left out. Without gaps the
         result is ``[self]``. Each segment's timestamps start at 0 and its
         ``time_origin`` is moved to its first sample; its timing report describes
         the segment.
@@ -213,9 +213,12 @@ class SensorLog:
             return [self] if len(self) >= min_samples else []
         from ._timing import segment_report
 
-        bounds = [0, *(g.index for g in self.timing.gaps), len(self)]
+        # a marked log holds the missing samples (NaN) just before each gap's index
+        marked = self.timing.gaps_policy == "mark"
+        starts = [0, *(g.index for g in self.timing.gaps)]
+        stops = [*(g.index - (g.missing if marked else 0) for g in self.timing.gaps), len(self)]
         out = []
-        for lo, hi in zip(bounds[:-1], bounds[1:]):
+        for lo, hi in zip(starts, stops):
             if hi - lo < min_samples:
                 continue
             t = self.timestamps[lo:hi]

@@ -31,7 +31,7 @@ MIN_SAMPLES = 3
 PathLike = Union[str, "os.PathLike[str]"]
 ColumnSpec = Union[str, int, Sequence[Union[str, int]], None]
 
-_GAPS = ("refuse", "split", "ignore")
+_GAPS = ("auto", "mark", "refuse", "split", "ignore")
 _UNSORTED = ("sort", "refuse")
 _DUPLICATES = ("drop", "refuse")
 _STAMPS = ("header", "bag")
@@ -145,7 +145,7 @@ def read(
     topic: str | None = None,
     dataset: str | None = None,
     stamps: Literal["header", "bag"] | None = None,
-    gaps: Literal["refuse", "split", "ignore"] = "refuse",
+    gaps: Literal["auto", "mark", "refuse", "split", "ignore"] = "auto",
     gap_threshold: float = 1.5,
     unsorted: Literal["sort", "refuse"] = "sort",
     duplicates: Literal["drop", "refuse"] = "drop",
@@ -204,9 +204,13 @@ def read(
         HDF5: path of the dataset or group to read.
     stamps : {"header", "bag"}, optional
         ROS bags: message ``header.stamp`` (default) or the bag's receive time.
-    gaps : {"refuse", "split", "ignore"}
-        Steps longer than ``gap_threshold`` median steps: refuse (error naming
-        where), keep and let :meth:`SensorLog.segments` split, or ignore.
+    gaps : {"auto", "mark", "refuse", "split", "ignore"}
+        Steps longer than ``gap_threshold`` median steps. "mark": place the samples
+        on the nominal grid, each missing one a NaN, which every statistic treats as
+        a gap (Stable32's Regularize); "auto" (default): mark when at most 10 % of the
+        samples are missing, else refuse; "refuse": an error naming where; "split":
+        keep the samples and let :meth:`SensorLog.segments` split; "ignore": analyse
+        as if the samples were contiguous.
     gap_threshold : float
         In median steps, > 1 (default 1.5: one missing sample is a gap).
     unsorted : {"sort", "refuse"}

@@ -6,11 +6,17 @@ Policies (parameters of :func:`sigmatau.io.read`):
 * ``duplicates``: "drop" (default; the first sample of each run of equal
   timestamps is kept, a TimingWarning says how many were dropped and how many
   of them carried other values) or "refuse".
-* ``gaps``: "refuse" (default; the error says where), "split" (keep every
-  sample; :meth:`SensorLog.segments` gives the gap-free runs) or "ignore"
-  (analyse across the gaps as if the samples were contiguous).
+* ``gaps``: "auto" (default: as "mark" when at most :data:`AUTO_MARK_SHARE` of the
+  samples are missing, except that a gap of at most :data:`AUTO_HOLD_SAMPLES`
+  samples holds the sample before it; else refused with the choices), "mark" (Stable32's
+  Regularize: the samples are placed on the nominal time grid and each missing
+  one is a NaN, which every statistic treats as a gap), "refuse" (the error says
+  where), "split" (keep every sample; :meth:`SensorLog.segments` gives the
+  gap-free runs) or "ignore" (analyse across the gaps as if the samples were
+  contiguous).
 
-A gap is a step longer than ``gap_threshold`` times the median step.
+A gap is a step longer than ``gap_threshold`` times the median step; it holds
+``round(step·rate) − 1`` missing samples at the nominal rate.
 """
 
 from __future__ import annotations
@@ -26,9 +32,19 @@ from ._errors import option_hint, repr_kw
 from ._timing_report import Gap, TimingReport
 from ._units import TIME_UNITS
 
-__all__ = ["check_times", "infer_time_unit", "process", "untimed", "segment_report"]
+__all__ = ["AUTO_HOLD_SAMPLES", "AUTO_MARK_SHARE", "check_times", "infer_time_unit", "process", "untimed", "segment_report"]
 
-GapPolicy = Literal["refuse", "split", "ignore"]
+GapPolicy = Literal["auto", "mark", "refuse", "split", "ignore"]
+
+#: Largest share of missing samples (of the samples the nominal grid holds) up to which
+#: ``gaps="auto"`` marks them as NaN gaps; beyond it the log is refused with the choices.
+AUTO_MARK_SHARE = 0.10
+#: Longest gap (missing samples) that ``gaps="auto"`` bridges by holding the sample before it,
+#: as a sensor's output register does when a read is missed. Scattered single drops would
+#: otherwise leave no gap-free window at long τ on frequency (rate) data, where a term is used
+#: only when every sample of its window is present; a held sample changes each statistic by
+#: about the share of held samples (a few per million in a log with a drop per second at 1 kHz).
+AUTO_HOLD_SAMPLES = 5
 UnsortedPolicy = Literal["sort", "refuse"]
 DuplicatesPolicy = Literal["drop", "refuse"]
 
@@ -152,13 +168,68 @@ def process(
         actions=tuple(actions),
     )
     if report.gaps:
+        share = report.missing / (m + report.missing)
+        if gaps == "auto" and share > AUTO_MARK_SHARE:
+            raise DataError(
+                f"{path}: {_gap_text(report, m)}, {100 * share:.3g} % of the samples (gaps are marked as"
+                f" missing samples by default up to {100 * AUTO_MARK_SHARE:g} %); to mark them all the same use"
+                f" {option_hint('--gaps mark', repr_kw('gaps', 'mark'))}, to analyse the gap-free segments"
+                f" {option_hint('--gaps split', repr_kw('gaps', 'split'))}, to analyse across the gaps"
+                f" {option_hint('--gaps ignore', repr_kw('gaps', 'ignore'))}")
         if gaps == "refuse":
-            raise DataError(f"{path}: {_gap_text(report, m)}; to analyse the gap-free segments use"
-                            f" {option_hint('--gaps split', repr_kw('gaps', 'split'))}, to analyse across the"
-                            f" gaps {option_hint('--gaps ignore', repr_kw('gaps', 'ignore'))}")
-        verb = "split the log at" if gaps == "split" else "ignored"
-        report = replace(report, actions=report.actions + (f"{verb} {len(report.gaps)} gap(s)",))
+            raise DataError(f"{path}: {_gap_text(report, m)}; to mark the missing samples use"
+                            f" {option_hint('--gaps mark', repr_kw('gaps', 'mark'))}, to analyse the gap-free"
+                            f" segments {option_hint('--gaps split', repr_kw('gaps', 'split'))}, to analyse"
+                            f" across the gaps {option_hint('--gaps ignore', repr_kw('gaps', 'ignore'))}")
+        if gaps in ("auto", "mark"):
+            t, channels, report = _marked(t, channels, report, hold=AUTO_HOLD_SAMPLES if gaps == "auto" else 0)
+        else:
+            verb = "split the log at" if gaps == "split" else "ignored"
+            report = replace(report, actions=report.actions + (f"{verb} {len(report.gaps)} gap(s)",))
+    elif gaps == "auto":
+        report = replace(report, gaps_policy="mark")
     return t, channels, report, time_origin
+
+
+def _marked(t: np.ndarray, channels: dict[str, np.ndarray], report: TimingReport,
+            hold: int = 0) -> tuple[np.ndarray, dict[str, np.ndarray], TimingReport]:
+    """The samples placed on the nominal grid with NaN for every missing one (Stable32's Regularize).
+
+    Each gap of ``report`` gets its ``missing`` samples (``round(step·rate) − 1`` at the
+    nominal rate); the timestamps of the inserted samples are interpolated between the
+    two around the gap. The gaps' ``index`` becomes that of the first sample after them
+    in the marked log, whose samples ``index − missing … index − 1`` are the inserted ones.
+    A gap of at most ``hold`` samples holds the sample before it instead of NaN; only the
+    longer gaps stay in ``report.gaps``, the held ones are counted in ``report.actions``.
+    """
+    counts = np.array([g.missing for g in report.gaps], dtype=np.int64)
+    where = np.array([g.index for g in report.gaps], dtype=np.int64)
+    shift = np.zeros(t.size, dtype=np.int64)
+    np.add.at(shift, where, counts)
+    new_pos = np.arange(t.size) + np.cumsum(shift)
+    size = t.size + int(counts.sum())
+    held = counts <= hold
+    # index into the original samples of every output sample: the sample itself, or for an
+    # inserted one the last sample before it (held) / -1 (missing)
+    source = np.full(size, -1, dtype=np.int64)
+    source[new_pos] = np.arange(t.size)
+    for g_at, k in zip(where[held].tolist(), counts[held].tolist()):
+        source[new_pos[g_at] - k: new_pos[g_at]] = g_at - 1
+    out = {}
+    for name, v in channels.items():
+        filled = np.where(source >= 0, v[np.maximum(source, 0)], np.nan)
+        out[name] = filled
+    grid = np.interp(np.arange(size), new_pos, t)
+    gaps = tuple(replace(g, index=int(new_pos[g.index]), missing=int(k))
+                 for g, k, h in zip(report.gaps, counts.tolist(), held.tolist()) if not h)
+    actions = list(report.actions)
+    if held.any():
+        actions.append(f"held the sample before each of {int(held.sum())} gap(s) of at most {hold} sample(s)"
+                       f" ({int(counts[held].sum())} sample(s))")
+    if gaps:
+        actions.append(f"marked {int(counts[~held].sum())} missing sample(s) in {len(gaps)} gap(s) as NaN on the"
+                       f" {_fmt(report.rate)} Hz grid")
+    return grid, out, replace(report, samples=int(size), gaps=gaps, gaps_policy="mark", actions=tuple(actions))
 
 
 def _sorted(raw: np.ndarray, channels: dict[str, np.ndarray], unsorted: UnsortedPolicy, path: str,

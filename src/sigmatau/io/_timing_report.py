@@ -151,7 +151,9 @@ class TimingReport:
             if self.gaps:
                 first = ", ".join(f"{_fmt_seconds(g.duration)} at {g.time:.6g} s" for g in self.gaps[:3])
                 more = f", … {len(self.gaps) - 3} more" if len(self.gaps) > 3 else ""
-                gap_text += f", {self.missing} samples missing: {first}{more}"
+                share = self.missing / self.samples if self.gaps_policy == "mark" and self.samples else None
+                of = f" ({100 * share:.3g} % of the {self.samples})" if share is not None else ""
+                gap_text += f", {self.missing} samples missing{of}: {first}{more}"
             lines.append(f"{gap_text} (policy {self.gaps_policy})")
         else:
             lines.append("timestamps: none (uniform sampling assumed)")
