@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys as _sys
 
-from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, units
+from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, prep, units
 from .core.driver import register_streamed as _register_streamed
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
@@ -45,7 +45,7 @@ __all__ = [
     # IMU noise model
     "NoiseModel",
     # submodules
-    "checks", "confidence", "datasets", "filterchain", "generate", "imu", "noiseid", "units",
+    "checks", "confidence", "datasets", "filterchain", "generate", "imu", "noiseid", "prep", "units",
 ]
 
 
