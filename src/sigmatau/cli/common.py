@@ -4,12 +4,14 @@ atomic writes, and the one-line error type for a usage error."""
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import tempfile
 from pathlib import Path
 from typing import Any, NoReturn, Optional, Sequence
 
+from ..errors import ParameterError
 from ..report.outputs import printable
 
 EXIT_OK, EXIT_DATA, EXIT_USAGE, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 3, 130, 143
@@ -183,6 +185,31 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
     g.add_argument("--theoh", choices=["fast", "exact"], default=theoh,
                    help=f"TheoH's TheoBR rows: fast (Fast TheoBR on block averages above 65,536 points, unless"
                         f" κ indicates phase noise) or exact (default {theoh}; docs/theoh-fast.md)")
+    pr = p.add_argument_group("preparation (applied to every channel in this order; docs/prep.md)")
+    pr.add_argument("--part", metavar="START:END",
+                    help="keep this time range, seconds from the first sample (either side may be empty)")
+    pr.add_argument("--outliers", type=float, metavar="K",
+                    help="replace by gaps the samples more than K robust standard deviations (MAD) from the median")
+    pr.add_argument("--drift", metavar="MODEL",
+                    help="remove the drift: linear, bisection, log or diffusion (frequency/rate data);"
+                         " quadratic, diff2, 3point or greenhall (phase data)")
+    pr.add_argument("--average", type=int, metavar="M", help="average M consecutive samples (rate becomes rate/M)")
+
+
+def _preparation(args: argparse.Namespace) -> Any:
+    """The :class:`~sigmatau.pipeline.prepare.Preparation` of the preparation options (None when none)."""
+    from ..pipeline.prepare import Preparation, parse_part
+
+    if args.outliers is not None and not (math.isfinite(args.outliers) and args.outliers > 0):
+        raise _UsageError(f"--outliers {args.outliers!r} must be a positive number")
+    if args.average is not None and args.average < 1:
+        raise _UsageError(f"--average {args.average!r} must be a positive integer")
+    try:
+        part = None if args.part is None else parse_part(args.part)
+    except ParameterError as exc:
+        raise _UsageError(f"--part: {exc}") from None
+    prep = Preparation(part=part, outliers=args.outliers, drift=args.drift, average=args.average)
+    return prep if prep else None
 
 
 def _read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -357,7 +384,8 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
         analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
                                model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
                                rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
-                               progress=display.line, theoh=args.theoh, on_step=display.event)
+                               progress=display.line, theoh=args.theoh, on_step=display.event,
+                               prep=_preparation(args))
     finally:
         display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]

@@ -42,6 +42,7 @@ from ..core.result import StabilityResult
 from ..core.shared import shared_record
 from ..stats import FUNCTIONS
 from ..uncertainty.attach import attach
+from .prepare import Preparation, prepare_log
 from .results import ChannelAnalysis, IMU_GROUPS, LogAnalysis, SI_TERM_UNITS, TERMS, json_ready
 
 __all__ = [
@@ -51,6 +52,7 @@ __all__ = [
     "ChannelAnalysis",
     "StepEvent",
     "LogAnalysis",
+    "Preparation",
     "analyze_log",
     "log_from_arrays",
     "datasheet_reference",
@@ -384,6 +386,7 @@ def analyze_log(
     progress: Optional[Callable[[str], None]] = None,
     theoh: str = "fast",
     on_step: Optional[Callable[[StepEvent], None]] = None,
+    prep: Optional[Preparation] = None,
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -429,6 +432,10 @@ def analyze_log(
         ``"fast"`` (default) uses Fast TheoBR on block averages above 65,536
         phase points, unless κ indicates phase noise; ``"exact"`` the definition.
         docs/theoh-fast.md gives the difference.
+    prep : Preparation, optional
+        Steps applied to every channel first, in the order part → outliers → drift →
+        average (:mod:`sigmatau.pipeline.prepare`); each channel's records of them are in
+        :attr:`ChannelAnalysis.prep`. Missing samples (NaN) are gaps throughout.
 
     Returns
     -------
@@ -451,16 +458,21 @@ def analyze_log(
         raise ParameterError(f"theoh={theoh!r} must be 'fast' or 'exact'")
     reference = datasheet_reference(datasheet)
     log, notes = _longest_segment(log)
+    log, prepared = prepare_log(log, prep)
+    if prep:
+        notes.append(f"prepared every channel: {prep.describe()}")
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names), max((log[n].nbytes for n in names), default=0))
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
                                    theoh, on_step)
+    done = [dataclasses.replace(c, prep=prepared.get(c.name, ())) for c in done]
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
                 "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
                 "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
-                "workers": workers, "theoh": theoh}
+                "workers": workers, "theoh": theoh,
+                "prep": {k: v for k, v in dataclasses.asdict(prep).items() if v is not None} if prep else {}}
     return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
                        notes=tuple(notes), warnings=tuple(seen),
                        seconds=time.perf_counter() - t0)

@@ -59,6 +59,9 @@ class ChannelAnalysis:
         Datasheet comparison rows (:meth:`sigmatau.imu.NoiseModel.compare`).
     seconds : float
         Wall time spent on the channel.
+    prep : tuple of dict
+        The preparation steps applied to the channel before its statistics, in order
+        (:meth:`sigmatau.prep.PrepResult.to_dict` of each; empty when none).
     """
 
     name: str
@@ -71,11 +74,13 @@ class ChannelAnalysis:
     model_note: str = ""
     datasheet: tuple[dict, ...] = ()
     seconds: float = 0.0
+    prep: tuple[dict, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (NaN and inf as None)."""
         return json_ready({
             "name": self.name, "group": self.group, "unit": self.unit, "n_samples": self.n_samples,
+            "prep": list(self.prep),
             "statistics": {k: r.to_dict() for k, r in self.results.items()},
             "skipped": dict(self.skipped),
             "model": self.model.to_dict() if self.model is not None else None,

@@ -90,10 +90,28 @@ def _checks_section(a: Any) -> str:
     if rows:
         parts.append("<h3>Samples</h3><table><tr><th class='l'>channel</th><th>std</th><th>levels</th>"
                      "<th class='l'>spectrum near f/2</th><th class='l'>findings</th></tr>" + "".join(rows) + "</table>")
+    parts.append(_prep_table(a))
     if a.warnings:
         parts.append("<h3>Warnings</h3><ul>" + "".join(f'<li class="warn">{_e(w)}</li>' for w in a.warnings)
                      + "</ul>")
     return "".join(parts)
+
+
+def _prep_table(a: Any) -> str:
+    """The preparation steps of each channel, in order, with what each did (empty without any)."""
+    rows = []
+    for ch in a.channels:
+        for step in getattr(ch, "prep", ()):
+            est = "; ".join(f"{k} {_num(v.get('value'))} ± {_num(v.get('stderr'))}"
+                            for k, v in (step.get("estimates") or {}).items())
+            notes = " ".join(step.get("notes") or ())
+            rows.append(f'<tr><td class="l">{_e(ch.name)}</td><td class="l">{_e(step.get("step", ""))}</td>'
+                        f'<td class="l">{_e(est)}</td><td class="l">{_e(notes)}</td></tr>')
+    if not rows:
+        return ""
+    return ("<h3>Preparation</h3><table><tr><th class='l'>channel</th><th class='l'>step</th>"
+            "<th class='l'>estimates (± standard error)</th><th class='l'>what was done</th></tr>"
+            + "".join(rows) + "</table>")
 
 
 def _overview_section(a: Any) -> str:
