@@ -13,6 +13,7 @@ OTHER_NAMES = [
     "theobr_kappa", "compute_channels", "NoiseModel", "imu", "units", "checks",
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     "power_law_noise", "mixed_noise", "confidence", "datasets", "filterchain", "generate", "noiseid", "prep",
+    "dynamic", "DynamicResult", "StationarityCheck",
 ]
 
 

@@ -111,3 +111,36 @@ def test_cli_preparation_options_and_errors(logs, tmp_path, capsys):
                                capsys)
         assert code == 2 and pattern in err and err.count("\n") == 1, (argv, err)
         assert not (tmp_path / "x").exists()
+
+
+def test_dynamic_stability_in_the_main_job(tmp_path, capsys):
+    from sigmatau.analysis import log_from_arrays
+
+    rng = np.random.default_rng(7)
+    steady = simulate("lsm6dsl-gyro", duration=1200, rate=RATE, rng=rng)
+    louder = simulate("lsm6dsl-gyro", duration=1200, rate=RATE, rng=rng)
+    louder[louder.size // 2:] *= 2.0  # the noise doubles halfway
+    log = log_from_arrays({"gyro_x": steady, "gyro_y": louder}, rate=RATE, units={"gyro_x": "rad/s", "gyro_y": "rad/s"})
+    a = analyze_log(log, statistics="oadev", dynamic=(120.0, 30.0))
+    steady_ch, louder_ch = a.channels
+    assert not steady_ch.dynamic.stationarity.flagged
+    assert louder_ch.dynamic.stationarity.flagged
+    assert abs(louder_ch.dynamic.stationarity.change_time - 600.0) <= 120.0
+    assert a.settings["dynamic"] == [120.0, 30.0]
+    assert "dynamic oadev:" in a.summary() and "FLAGGED" not in steady_ch.dynamic.stationarity.finding
+    # through the CLI: results.json, the heat map, and a bad specification
+    path = _csv(tmp_path / "two.csv", np.arange(steady.size) / RATE, {"gyro_x": steady, "gyro_y": louder})
+    out = tmp_path / "o"
+    code, _, err = run_cli(["analyze", str(path), "--out", str(out), "--stat", "oadev", "--no-model",
+                            "--dynamic", "120:30", "--figures", "png"], capsys)
+    assert code == 0, err
+    data = json.loads((out / "results.json").read_text())
+    assert data["channels"][1]["dynamic"]["stationarity"]["flagged"] is True
+    assert (out / "dynamic_gyro_y.png").is_file()
+    code, _, err = run_cli(["analyze", str(path), "--out", str(tmp_path / "x"), "--dynamic", "2 min"], capsys)
+    assert code == 2 and "--dynamic '2 min' must be WINDOW:STEP in seconds" in err
+    # a window longer than the record: the statistics stand, the summary says why there is no dynamic
+    code, said, err = run_cli(["analyze", str(path), "--out", str(tmp_path / "y"), "--stat", "oadev", "--no-model",
+                               "--no-figures", "--dynamic", "5000:10"], capsys)
+    assert code == 0, err
+    assert "dynamic stability not computed: window=500000 samples is longer than the record" in said

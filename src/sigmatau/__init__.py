@@ -15,6 +15,7 @@ from .core.driver import register_streamed as _register_streamed
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .stats.allan import adev, mdev, oadev, ostdev, stdev, tdev
+from .stats.dynamic import DynamicResult, StationarityCheck, dynamic
 from .scale.channels import compute_channels
 from .uncertainty.confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
@@ -33,6 +34,8 @@ __all__ = [
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
     "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
     "theobr_kappa", "compute_channels",
+    # the statistics over sliding windows (non-stationarity)
+    "dynamic", "DynamicResult", "StationarityCheck",
     # uncertainty and noise identification
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     # noise generation

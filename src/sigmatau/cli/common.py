@@ -194,6 +194,9 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
                     help="remove the drift: linear, bisection, log or diffusion (frequency/rate data);"
                          " quadratic, diff2, 3point or greenhall (phase data)")
     pr.add_argument("--average", type=int, metavar="M", help="average M consecutive samples (rate becomes rate/M)")
+    g.add_argument("--dynamic", metavar="WINDOW:STEP",
+                   help="also OADEV over sliding windows of WINDOW seconds every STEP seconds, a heat map and a"
+                        " check that the windows agree within their intervals (non-stationarity)")
 
 
 def _preparation(args: argparse.Namespace) -> Any:
@@ -210,6 +213,20 @@ def _preparation(args: argparse.Namespace) -> Any:
         raise _UsageError(f"--part: {exc}") from None
     prep = Preparation(part=part, outliers=args.outliers, drift=args.drift, average=args.average)
     return prep if prep else None
+
+
+def _dynamic_spec(args: argparse.Namespace) -> Optional[tuple[float, float]]:
+    """``--dynamic WINDOW:STEP`` in seconds as ``(window, step)``, None when not given."""
+    if args.dynamic is None:
+        return None
+    parts = args.dynamic.split(":")
+    try:
+        window, step = (float(v) for v in parts)
+    except ValueError:
+        raise _UsageError(f"--dynamic {args.dynamic!r} must be WINDOW:STEP in seconds, e.g. 600:60") from None
+    if not (math.isfinite(window) and math.isfinite(step) and window > 0 and step > 0):
+        raise _UsageError(f"--dynamic {args.dynamic!r}: window and step must be positive numbers of seconds")
+    return window, step
 
 
 def _read_options(args: argparse.Namespace) -> dict[str, Any]:
@@ -385,7 +402,7 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
                                model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
                                rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
                                progress=display.line, theoh=args.theoh, on_step=display.event,
-                               prep=_preparation(args))
+                               prep=_preparation(args), dynamic=_dynamic_spec(args))
     finally:
         display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]

@@ -12,7 +12,7 @@ from ..report.outputs import printable
 from .analyze import _list_topics
 from .common import (
     EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _add_analysis_options, _add_input_options,
-    _atomic_write, _check_replaceable, _preparation, _read, _say,
+    _atomic_write, _check_replaceable, _dynamic_spec, _preparation, _read, _say,
 )
 
 __all__ = ["add_cli"]
@@ -34,7 +34,8 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         return _stats_chunked(args)
     log = _read(args, console)
     a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
-                    workers=args.workers, progress=console.progress, theoh=args.theoh, prep=_preparation(args))
+                    workers=args.workers, progress=console.progress, theoh=args.theoh, prep=_preparation(args),
+                    dynamic=_dynamic_spec(args))
     _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
                                   f" data, {a.settings['confidence']:.2%} intervals")
     for w in a.warnings:

@@ -242,7 +242,8 @@ def _no_step(step: str, done: bool) -> None:
 
 def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
              reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
-             theoh: str = "fast", step: Callable[[str, bool], None] = _no_step) -> ChannelAnalysis:
+             theoh: str = "fast", step: Callable[[str, bool], None] = _no_step,
+             dynamic_spec: Optional[tuple[float, float]] = None) -> ChannelAnalysis:
     from ..imu import model as imu
     from ..imu.units import sensor_unit
 
@@ -283,9 +284,26 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
     rows: tuple[dict, ...] = ()
     if model is not None and reference.get(group):
         rows = tuple(model.compare(reference[group]))
+    dyn, dyn_note = None, ""
+    if dynamic_spec is not None:
+        step("dynamic", False)
+        dyn, dyn_note = _dynamic(x, log, dynamic_spec, confidence)
+        step("dynamic", True)
     return ChannelAnalysis(name=name, group=group, unit=unit, n_samples=int(x.size), results=results,
                            skipped=skipped, model=model, model_note=note, datasheet=rows,
-                           seconds=time.perf_counter() - t0)
+                           seconds=time.perf_counter() - t0, dynamic=dyn, dynamic_note=dyn_note)
+
+
+def _dynamic(x: np.ndarray, log: Any, spec: tuple[float, float], confidence: float) -> tuple[Any, str]:
+    """OADEV over sliding windows of ``spec = (window, step)`` seconds, or None and why not."""
+    from ..stats.dynamic import dynamic
+
+    window, step_s = spec
+    try:
+        return dynamic(x, rate=log.rate, window=window, step=step_s, window_unit="seconds",
+                       data_type=log.data_type, confidence=confidence), ""
+    except (DataError, ParameterError) as exc:
+        return None, str(exc)
 
 
 def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float, theoh: str, model: Any,
@@ -387,6 +405,7 @@ def analyze_log(
     theoh: str = "fast",
     on_step: Optional[Callable[[StepEvent], None]] = None,
     prep: Optional[Preparation] = None,
+    dynamic: Optional[tuple[float, float]] = None,
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -436,6 +455,10 @@ def analyze_log(
         Steps applied to every channel first, in the order part → outliers → drift →
         average (:mod:`sigmatau.pipeline.prepare`); each channel's records of them are in
         :attr:`ChannelAnalysis.prep`. Missing samples (NaN) are gaps throughout.
+    dynamic : (window, step) in seconds, optional
+        Also compute OADEV over sliding windows of every channel and its stationarity
+        check (:func:`sigmatau.dynamic`, Stable32's Dynamic Stability), in
+        :attr:`ChannelAnalysis.dynamic`; a window or step that does not fit is a note.
 
     Returns
     -------
@@ -464,7 +487,7 @@ def analyze_log(
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names), max((log[n].nbytes for n in names), default=0))
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
-                                   theoh, on_step)
+                                   theoh, on_step, dynamic)
     done = [dataclasses.replace(c, prep=prepared.get(c.name, ())) for c in done]
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
@@ -472,7 +495,8 @@ def analyze_log(
                 "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
                 "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
                 "workers": workers, "theoh": theoh,
-                "prep": {k: v for k, v in dataclasses.asdict(prep).items() if v is not None} if prep else {}}
+                "prep": {k: v for k, v in dataclasses.asdict(prep).items() if v is not None} if prep else {},
+                "dynamic": None if dynamic is None else [float(v) for v in dynamic]}
     return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
                        notes=tuple(notes), warnings=tuple(seen),
                        seconds=time.perf_counter() - t0)
@@ -546,6 +570,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
                       reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
                       progress: Optional[Callable[[str], None]],
                       theoh: str = "fast", on_step: Optional[Callable[[StepEvent], None]] = None,
+                      dynamic: Optional[tuple[float, float]] = None,
                       ) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
     from ..imu.model import ImuWarning
@@ -561,7 +586,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
         # The statistics and the model of a channel share its validated samples, phase and
         # noise identification (computed once instead of once per statistic).
         with shared_record(log[name]):
-            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step)
+            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step, dynamic)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch

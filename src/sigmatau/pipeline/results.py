@@ -62,6 +62,9 @@ class ChannelAnalysis:
     prep : tuple of dict
         The preparation steps applied to the channel before its statistics, in order
         (:meth:`sigmatau.prep.PrepResult.to_dict` of each; empty when none).
+    dynamic : DynamicResult or None
+        OADEV over sliding windows and its stationarity check (:func:`sigmatau.dynamic`),
+        when asked for; ``dynamic_note`` says why there is none when it failed.
     """
 
     name: str
@@ -75,12 +78,16 @@ class ChannelAnalysis:
     datasheet: tuple[dict, ...] = ()
     seconds: float = 0.0
     prep: tuple[dict, ...] = ()
+    dynamic: Any = None
+    dynamic_note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dictionary (NaN and inf as None)."""
         return json_ready({
             "name": self.name, "group": self.group, "unit": self.unit, "n_samples": self.n_samples,
             "prep": list(self.prep),
+            "dynamic": self.dynamic.to_dict() if self.dynamic is not None else None,
+            "dynamic_note": self.dynamic_note,
             "statistics": {k: r.to_dict() for k, r in self.results.items()},
             "skipped": dict(self.skipped),
             "model": self.model.to_dict() if self.model is not None else None,
@@ -176,6 +183,10 @@ class LogAnalysis:
                 lines.append(_model_lines(ch.model))
             elif ch.model_note:
                 lines.append(f"  no IMU model: {ch.model_note}")
+            if ch.dynamic is not None:
+                lines.append(f"  dynamic {ch.dynamic.statistic}: {ch.dynamic.stationarity.finding}")
+            elif ch.dynamic_note:
+                lines.append(f"  dynamic stability not computed: {ch.dynamic_note}")
             for row in ch.datasheet:
                 verdict = "covers" if row["covers"] else "does not cover"
                 lines.append(f"  datasheet {row['term']} = {row['reference_given']}: interval {verdict} it"

@@ -163,6 +163,13 @@ def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[s
             plots.save_figure(fig, folder / stem, formats=formats)
             made.append({"stem": stem, "kind": "signal", "group": c.group,
                          "caption": f"{c.name}: time series, power spectral density (Welch) and lag plot"})
+    for c in [c for c in analysis.channels if getattr(c, "dynamic", None) is not None][:MAX_SIGNAL_FIGURES]:
+        fig = plots.dynamic_figure(c.dynamic, unit=c.unit, title=f"{c.name}: dynamic {c.dynamic.statistic}")
+        stem = _safe_stem(f"dynamic_{c.name}", taken)
+        plots.save_figure(fig, folder / stem, formats=formats)
+        made.append({"stem": stem, "kind": "dynamic", "group": c.group,
+                     "caption": f"{c.name}: {c.dynamic.statistic} over sliding windows of {c.dynamic.window:,} samples"
+                                f" every {c.dynamic.step:,}; {c.dynamic.stationarity.finding}"})
     return made
 
 

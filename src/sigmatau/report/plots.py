@@ -42,11 +42,13 @@ from .figbase import (STATISTIC_COLORS, TERM_COLORS, ChannelCurves, figure_to_by
                       save_figure)
 # Outside __all__ but used through this module by the batch fleet figures (scale.batch).
 from .figbase import matplotlib_modules, new_figure  # noqa: F401
+from .dynamicfig import dynamic_figure
 from .sigmafig import sigma_tau_figure
 from .signalfig import SignalData, prepare_signal, signal_figure
 
 __all__ = [
     "ChannelCurves",
+    "dynamic_figure",
     "STATISTIC_COLORS",
     "TERM_COLORS",
     "sigma_tau_figure",
