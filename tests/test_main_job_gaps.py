@@ -144,3 +144,23 @@ def test_dynamic_stability_in_the_main_job(tmp_path, capsys):
                                "--no-figures", "--dynamic", "5000:10"], capsys)
     assert code == 0, err
     assert "dynamic stability not computed: window=500000 samples is longer than the record" in said
+
+
+def test_simulate_drops_samples_and_analyze_marks_them(tmp_path, capsys):
+    path = tmp_path / "d.csv"
+    code, _, err = run_cli(["simulate", str(path), "--duration", "120", "--rate", "100", "--sensors", "gyro",
+                            "--drop", "0.002", "--gap", "30:1.5", "--gap", "80:0.2"], capsys)
+    rows = path.read_text().count("\n") - 1
+    assert code == 0 and f"dropped {12_000 - rows} of 12,000 samples" in err, err
+    assert 12_000 - rows >= 170 + 20  # the two gaps and about 24 scattered samples (some may fall in a gap)
+    log = io.read(path)
+    # the scattered drops are held (at most 5 samples each), the two gaps marked as missing
+    missing = [g.missing for g in log.timing.gaps]
+    assert len(log) == 12_000 and len(missing) == 2 and 150 <= missing[0] <= 152 and 20 <= missing[1] <= 22
+    assert np.isnan(log["gyro_x"]).sum() == sum(missing)
+    for argv, pattern in ((["--drop", "1.5"], "--drop 1.5 must be a share"), (["--gap", "3"], "--gap '3' must be"),
+                          (["--drop", "0.1", "--h", "h0=1"], "apply to simulated IMU logs")):
+        code, _, err = run_cli(["simulate", str(tmp_path / "e.csv"), *argv], capsys)
+        assert code == 2 and pattern in err, (argv, err)
+    code, _, err = run_cli(["simulate", str(tmp_path / "e.npy"), "--drop", "0.1"], capsys)
+    assert code == 2 and "write .csv or .npz" in err

@@ -85,6 +85,8 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
         raise _UsageError(f"--rate {args.rate!r} must be positive")
     n = int(round(args.duration * (args.rate or 1.0)))
     if args.h:
+        if args.drop is not None or args.gap:
+            raise _UsageError("--drop and --gap apply to simulated IMU logs, not to --h power-law noise")
         return _simulate_power_law(args, out, suffix)
     parts = sorted({k.rsplit("-", 1)[0] for k in PRESETS})
     if args.preset not in parts and args.preset != "none":
@@ -114,6 +116,10 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
     chans = _simulated_imu(args.duration, rate, args.seed, gyro_unit=units["gyro"], accel_unit=units["accel"],
                            spec=spec)
     t = np.arange(n) / rate
+    keep = _kept_samples(args, n, rate, suffix)
+    if keep is not None:
+        t = t[keep]
+        chans = {k: v[keep] for k, v in chans.items()}
     if suffix == ".csv":
         header = ["timestamp [s]"] + [f"{k} [{units[k.split('_')[0]]}]" for k in chans]
         _write_csv(out, header, [t, *chans.values()])
@@ -122,11 +128,40 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
     else:
         _atomic_npy(out, np.column_stack(list(chans.values())))
     _say(f"wrote {out}: {len(chans)} channels ({', '.join(f'{k} [{units[k.split(chr(95))[0]]}]' for k in chans)})"
-         f" × {n:,} samples at {rate:g} Hz, seed {args.seed}", err=True)
+         f" × {t.size:,} samples at {rate:g} Hz, seed {args.seed}", err=True)
+    if keep is not None:
+        _say(f"  dropped {n - t.size:,} of {n:,} samples (--drop, --gap); the timestamps show where", err=True)
     if suffix == ".npy":
         _say(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
              f" --rate {rate:g}", err=True)
     return EXIT_OK
+
+
+def _kept_samples(args: argparse.Namespace, n: int, rate: float, suffix: str) -> Optional[Any]:
+    """Which samples to keep after ``--drop SHARE`` (scattered single samples, seeded) and
+    ``--gap START:DURATION`` (seconds; repeatable); None when nothing is dropped."""
+    import numpy as np
+
+    if args.drop is None and not args.gap:
+        return None
+    if suffix == ".npy":
+        raise _UsageError("--drop and --gap need timestamps to show the missing samples: write .csv or .npz")
+    keep = np.ones(n, dtype=bool)
+    if args.drop is not None:
+        if not 0 <= args.drop < 1:
+            raise _UsageError(f"--drop {args.drop!r} must be a share of the samples in [0, 1)")
+        rng = np.random.default_rng([args.seed, 2])  # its own stream: the samples stay those of --seed
+        keep[rng.choice(n, int(round(args.drop * n)), replace=False)] = False
+    for spec in args.gap:
+        try:
+            start, duration = (float(v) for v in spec.split(":"))
+        except ValueError:
+            raise _UsageError(f"--gap {spec!r} must be START:DURATION in seconds, e.g. 600:2.5") from None
+        if not (start >= 0 and duration > 0):
+            raise _UsageError(f"--gap {spec!r}: START must be ≥ 0 and DURATION > 0 seconds")
+        keep[int(round(start * rate)):int(round((start + duration) * rate))] = False
+    keep[0] = keep[-1] = True  # the record's span stays the simulated one
+    return keep
 
 
 def _simulate_power_law(args: argparse.Namespace, out: Path, suffix: str) -> int:
@@ -193,6 +228,10 @@ def add_cli(sub: Any) -> None:
                              help=f"{g} {what} (SI when no unit)")
     sim.add_argument("--h", help="power-law noise instead: levels like 'h0=1e-20,h-1=1e-23' (alpha 2 … -4)")
     sim.add_argument("--data-type", choices=["freq", "phase"], default="freq", help="with --h: what to write")
+    sim.add_argument("--drop", type=float, metavar="SHARE",
+                     help="leave out this share of the samples, scattered (dropped messages; .csv/.npz)")
+    sim.add_argument("--gap", action="append", default=[], metavar="START:DURATION",
+                     help="leave out DURATION seconds from START (repeatable; .csv/.npz)")
     sim.add_argument("--force", action="store_true", help="replace an existing file")
     sim.add_argument("--quiet", action="store_true", help="no progress output")
     sim.add_argument("--debug", action="store_true", help="show the traceback of an error")
