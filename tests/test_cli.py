@@ -347,7 +347,9 @@ def _write_bytes(path: Path, data: bytes) -> Path:
      ["too few samples for any statistic"]),
     (lambda d: _write_bytes(d / "bad.npy", b"\x93NUMPY garbage"), [], 1, ["bad.npy"]),
     (lambda d: _write(d / "nan.csv", "t,gyro_x\n" + "".join(f"{i / 100},{'nan' if i == 50 else i % 7}\n"
-                                                         for i in range(200))), [], 1, ["NaN"]),
+                                                         for i in range(200))), ["--gaps", "refuse"], 1, ["NaN"]),
+    (lambda d: _write(d / "inf.csv", "t,gyro_x\n" + "".join(f"{i / 100},{'inf' if i == 50 else i % 7}\n"
+                                                         for i in range(200))), [], 1, ["infinite"]),
     (lambda d: _write(d / "gap.csv", "t,gyro_x\n" + "".join(f"{i / 100 if i < 100 else i / 100 + 1},{i % 7}\n"
                                                           for i in range(300))), [], 1, ["gap"]),
     (lambda d: _write(d / "c.csv", "t,gyro_x\n" + "".join(f"{i / 100},{i % 7}\n" for i in range(300))),

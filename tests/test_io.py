@@ -710,11 +710,26 @@ def test_non_numeric_column_and_values(tmp_path):
 
 
 def test_nan_values(tmp_path):
-    p = _write(tmp_path / "n.csv", "gx,gy\n1,2\nnan,2\n3,4\n")
+    # NaN cells are missing samples (gaps): kept by default up to 10 % of a column, refused beyond
+    # and under gaps='refuse'; inf is always refused (unless allow_nan)
+    p = _write(tmp_path / "n.csv", "gx,gy\n" + "1,2\n" * 10 + "nan,2\n" + "3,4\n" * 9)
+    log = io.read(p, rate=1)
+    assert np.isnan(log["gyro_x"][10]) and np.isnan(log["gyro_x"]).sum() == 1
+    assert any("kept 1 NaN value(s)" in a for a in log.timing.actions)
     with pytest.raises(DataError) as e:
-        io.read(p, rate=1)
-    _check(e, DataError, "column 'gx' \\(gyro_x\\) holds 1 NaN", "sample 1", "allow_nan=True")
-    assert np.isnan(_quiet_read(p, rate=1, allow_nan=True)["gyro_x"][1])
+        io.read(p, rate=1, gaps="refuse")
+    _check(e, DataError, "column 'gx' \\(gyro_x\\) holds 1 NaN", "sample 10", "gaps='refuse'",
+           r"--gaps mark \(gaps='mark' in Python\)")
+    many = _write(tmp_path / "m.csv", "gx,gy\n1,2\nnan,2\n3,4\n")
+    with pytest.raises(DataError) as e:
+        io.read(many, rate=1)
+    _check(e, DataError, "holds 1 NaN", "33.3 % of the column")
+    assert np.isnan(io.read(many, rate=1, gaps="mark")["gyro_x"][1])
+    inf = _write(tmp_path / "i.csv", "gx,gy\n1,2\ninf,2\n3,4\n")
+    with pytest.raises(DataError) as e:
+        io.read(inf, rate=1, gaps="mark")
+    _check(e, DataError, "holds 1 infinite value", "sample 1")
+    assert np.isinf(_quiet_read(inf, rate=1, allow_nan=True)["gyro_x"][1])
     t = _write(tmp_path / "t.csv", "t,gx\n0,1\nnan,1\n0.2,1\n")
     with pytest.raises(DataError) as e:
         io.read(t)

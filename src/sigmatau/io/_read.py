@@ -6,6 +6,7 @@ import inspect
 
 import os
 import warnings as _warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal, Mapping, Sequence, Union
 
@@ -15,12 +16,12 @@ from ..core.validate import DataType, check_data_type, check_rate
 from ..errors import DataError, ParameterError, SigmaTauError
 from . import _hdf5, _numpy, _parquet, _ros, _text  # noqa: F401  (they register their readers)
 from ._columns import list_names, recognise, unused_message
-from ._errors import FormatError, InputNotFoundError, InputWarning, TimingWarning, option_hint
+from ._errors import FormatError, InputNotFoundError, InputWarning, TimingWarning, option_hint, repr_kw
 from ._model import SensorLog, Source, TopicInfo
 from ._progress import Progress
 from ._registry import Options, Table, detect, get
 from ._stream import OnceInput, is_once
-from ._timing import check_times, infer_time_unit, process, untimed
+from ._timing import AUTO_MARK_SHARE, check_times, infer_time_unit, process, untimed
 from ._units import DEFAULT_UNITS, GROUP_UNITS, TIME_UNITS, canonical_unit, declared_unit, time_unit_name
 
 __all__ = ["read", "list_topics", "detect_format", "MIN_SAMPLES"]
@@ -378,12 +379,14 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
     if not data or table.rows == 0:
         raise DataError(f"{display}: no numeric data")
     names, groups_of = _names_groups(table)
-    if not opts.allow_nan:
-        _refuse_non_finite(data, names, display)
+    kept_nan = 0 if opts.allow_nan else _non_finite(data, names, display, opts.gaps)
     channels = {names[o]: v for o, v in data.items()}
     groups = _grouped(data, names, groups_of)
     units, origin = _channel_units(table, opts, display, names, groups_of, groups, channels, messages)
     channels, timestamps, report, time_origin = _timing(table, opts, display, channels, messages)
+    if kept_nan:
+        report = replace(report, actions=report.actions + (
+            f"kept {kept_nan} NaN value(s) of the data columns as missing samples (gaps every statistic skips)",))
     n = report.samples
     if n < MIN_SAMPLES:
         raise DataError(f"{display}: only {n} sample(s); at least {MIN_SAMPLES} are needed")
@@ -411,17 +414,34 @@ def _finish(table: Table, opts: Options, display: str, messages: list[tuple[str,
     )
 
 
-def _refuse_non_finite(data: dict[str, np.ndarray], names: dict[str, str], display: str) -> None:
-    """One line naming the first column with NaN or inf, and where (unless allow_nan)."""
+def _non_finite(data: dict[str, np.ndarray], names: dict[str, str], display: str, gaps: str) -> int:
+    """NaN cells are missing samples under ``gaps`` "mark" (any share) and "auto" (at most
+    AUTO_MARK_SHARE of a column); anything else non-finite, and NaN under the other policies, is one
+    line naming the first column and where. Returns the NaN cells kept."""
+    kept = 0
     for orig, v in data.items():
         bad = ~np.isfinite(v)
-        if bad.any():
-            i = int(np.flatnonzero(bad)[0])
-            called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
-            raise DataError(
-                f"{display}: column {called} holds {int(bad.sum())} NaN/inf value(s) (first at sample {i});"
-                " remove them from the file (in Python, allow_nan=True keeps them)"
-            )
+        if not bad.any():
+            continue
+        called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
+        nan = np.isnan(v)
+        inf = bad & ~nan
+        if inf.any():
+            i = int(np.flatnonzero(inf)[0])
+            raise DataError(f"{display}: column {called} holds {int(inf.sum())} infinite value(s) (first at sample"
+                            f" {i}); remove them from the file")
+        share = float(nan.mean())
+        if gaps == "mark" or (gaps == "auto" and share <= AUTO_MARK_SHARE):
+            kept += int(nan.sum())
+            continue
+        i = int(np.flatnonzero(nan)[0])
+        why = (f"{100 * share:.3g} % of the column, more than the {100 * AUTO_MARK_SHARE:g} % kept as gaps by default"
+               if gaps == "auto" else f"gaps={gaps!r}")
+        raise DataError(
+            f"{display}: column {called} holds {int(nan.sum())} NaN value(s) (first at sample {i}; {why});"
+            f" to keep them as missing samples use {option_hint('--gaps mark', repr_kw('gaps', 'mark'))}"
+        )
+    return kept
 
 
 def _grouped(data: dict[str, np.ndarray], names: dict[str, str],
