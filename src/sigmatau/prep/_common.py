@@ -23,7 +23,7 @@ from typing import Literal
 
 import numpy as np
 
-from ..core.validate import check_data_type, check_rate
+from ..core.validate import as_series, check_data_type, check_rate
 from ..errors import DataError, ParameterError
 
 __all__ = [
@@ -45,37 +45,15 @@ NOISE_MODELS: tuple[str, ...] = ("wpm", "wfm", "rwfm")
 def series(data: object, name: str = "data") -> np.ndarray:
     """``data`` as a new 1-D float64 array in which NaN marks a gap (masked values become NaN).
 
+    The checks of every statistic (:func:`sigmatau.core.validate.as_series` with ``gaps=True``),
+    on a copy: a step never writes into its input.
+
     Raises
     ------
     DataError
         Non-numeric, not 1-D, empty, holding ±inf, or without a single valid sample.
     """
-    if isinstance(data, np.ma.MaskedArray):
-        data = np.ma.filled(np.ma.asarray(data, dtype=np.float64), np.nan)
-    try:
-        arr = np.asarray(data)
-    except Exception:  # ragged lists and the like
-        raise DataError(f"{name} cannot be read as a numeric array (ragged or mixed sequence?)") from None
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.bool_)):
-        raise DataError(f"{name} must be numeric, got dtype {arr.dtype}")
-    if np.issubdtype(arr.dtype, np.complexfloating):
-        raise DataError(f"{name} must be real, got dtype {arr.dtype}")
-    if arr.ndim != 1:
-        if arr.ndim == 2 and 1 in arr.shape:
-            arr = arr.reshape(-1)
-        else:
-            raise DataError(f"{name} must be 1-D, got shape {arr.shape}")
-    if arr.size == 0:
-        raise DataError(f"{name} is empty")
-    out = np.array(arr, dtype=np.float64, copy=True)
-    inf = np.isinf(out)
-    if inf.any():
-        first = int(np.flatnonzero(inf)[0])
-        raise DataError(f"{name} holds {int(inf.sum())} infinite value(s) (first at index {first});"
-                        " only NaN marks a gap")
-    if np.isnan(out).all():
-        raise DataError(f"{name} holds no valid sample: all {out.size} are NaN (gaps)")
-    return out
+    return np.array(as_series(data, name, gaps=True), dtype=np.float64, copy=True)
 
 
 def rate_of(rate: object) -> float:

@@ -185,6 +185,21 @@ def _kappa_text(k: TheoBRKappa) -> str:
     return f"theobr kappa={k.kappa:.6f} (n={k.n}, fast: blocks of {k.block} points)"
 
 
+def _record(stat: Statistic, data: object, rate: object, data_type: object
+            ) -> tuple[Optional[GappedPhase], Optional[np.ndarray], float, str, int, int]:
+    """``(gapped, phase, rate, data_type, N, exponent)`` of TheoBR's or TheoH's input.
+
+    Without gaps the phase scaled by 2**-k (var(c·x) = c²·var(x) and κ is scale free, so
+    unscaling the variance is exact) and ``gapped`` None; with gaps the gap-free runs
+    (:func:`sigmatau.core.driver.gapped_phase`) and ``phase`` None.
+    """
+    gapped = _driver.gapped_phase(stat, data, rate, data_type)
+    if gapped is not None:
+        return gapped, None, gapped.rate, gapped.data_type, gapped.n_points, gapped.exponent
+    p = _driver.prepare_scaled(stat, data, rate, data_type)
+    return None, p.phase, p.rate, p.data_type, p.phase.size, p.exponent
+
+
 # --- records with gaps: the kernels pooled over the gap-free runs --------------------
 
 
@@ -458,14 +473,7 @@ def theobr(
     """
     check_options(alpha, confidence, ci)
     method = _check_kappa_method(kappa)
-    gapped = _driver.gapped_phase(THEOBR, data, rate, data_type)
-    if gapped is not None:
-        rate_f, dtype, N, exponent = gapped.rate, gapped.data_type, gapped.n_points, gapped.exponent
-    else:
-        # The kernels run on the phase scaled by 2**-k (prepare() refuses beyond 2**±450);
-        # var(c·x) = c²·var(x) and κ is scale free, so unscaling the variance is exact.
-        p = _driver.prepare_scaled(THEOBR, data, rate, data_type)
-        x, rate_f, dtype, N, exponent = p.phase, p.rate, p.data_type, p.phase.size, p.exponent
+    gapped, x, rate_f, dtype, N, exponent = _record(THEOBR, data, rate, data_type)
     _check_kappa_points(N, dtype)
     ms = select_m(
         "theobr", n_points=N, rate=rate_f, taus=taus, m=m, points_per_decade=points_per_decade,
@@ -721,13 +729,7 @@ def theoh(
     check_options(alpha, confidence, ci)
     kappa_method = _check_kappa_method(kappa)
     theoh_method = _check_theoh_method(method)
-    gapped = _driver.gapped_phase(THEOH, data, rate, data_type)
-    if gapped is not None:
-        rate_f, dtype, N, exponent = gapped.rate, gapped.data_type, gapped.n_points, gapped.exponent
-    else:
-        # Scaled phase as in theobr(); the variance is unscaled before the low/high split.
-        p = _driver.prepare_scaled(THEOH, data, rate, data_type)
-        x, rate_f, dtype, N, exponent = p.phase, p.rate, p.data_type, p.phase.size, p.exponent
+    gapped, x, rate_f, dtype, N, exponent = _record(THEOH, data, rate, data_type)
     _check_kappa_points(N, dtype)
     tau0 = 1.0 / rate_f
     ma, mb = _theoh_factors(N, rate_f, taus, m, points_per_decade)
