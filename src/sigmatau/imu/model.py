@@ -126,7 +126,7 @@ from .kalibr import kalibr_config
 from .noisemodel import NoiseModel, optimal_averaging
 from .presets import PRESETS, Preset
 from .results import Flag, OptimalAveraging, Parameter, Region, format_duration
-from .simulation import simulate
+from .simulation import simulate, temperature_profile
 from .terms import B_FACTOR, READ_FACTOR, ImuWarning, avar_terms
 
 # Also importable from here, outside ``__all__`` (the report and pipeline layers use them).
@@ -142,6 +142,7 @@ __all__ = [
     "PRESETS",
     "ImuWarning",
     "simulate",
+    "temperature_profile",
     "analyze",
     "from_curve",
     "avar_terms",

@@ -2,15 +2,19 @@
 
 :func:`simulate` is a composition of small steps: resolve the preset, the output
 unit, rate and length, the coefficients in that unit, then add each term's
-noise (``_five_terms``), an optional Gauss–Markov process and quantisation. The
-order in which the random generator is drawn from is that of the original
-single function, so a seed gives the same samples.
+noise (``_five_terms``), an optional Gauss–Markov process, the deterministic
+environment (a warm-up transient, a temperature-dependent bias:
+``_add_environment``) and quantisation. The order in which the random generator
+is drawn from is that of the original single function, so a seed gives the same
+samples; the environment draws nothing from it, and without its options the
+output is unchanged bit for bit. :func:`temperature_profile` makes the
+temperature records (ramp, cycle) that ``simulate(temperature=...)`` takes.
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any, Literal, Optional, Union
+from typing import Any, Callable, Literal, Optional, Sequence, Union
 
 import numpy as np
 
@@ -21,7 +25,7 @@ from .presets import PRESETS, Preset
 from .terms import _level
 from .units import TERMS, SensorUnit, convert, sensor_unit, term_unit
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "temperature_profile"]
 
 
 def simulate(
@@ -40,6 +44,9 @@ def simulate(
     lsb: Optional[float] = None,
     flicker: Literal["kasdin", "tip"] = "kasdin",
     rng: Any = None,
+    warmup: Optional[tuple[float, float]] = None,
+    temperature: Union[None, Sequence[float], np.ndarray, Callable[[np.ndarray], Any]] = None,
+    tempco: Union[None, float, Sequence[float]] = None,
 ) -> np.ndarray:
     """Simulate one IMU channel from the five-term model (plus Gauss–Markov).
 
@@ -72,6 +79,19 @@ def simulate(
         or the design tip's octave sum.
     rng : None, int, SeedSequence or numpy.random.Generator
         Source of randomness.
+    warmup : (amplitude, time_constant), optional
+        A warm-up transient ``A·exp(−t/T)`` added to the samples: A in the
+        output unit, T in seconds (> 0), ``t_i = i/rate`` from power-on.
+    temperature : array_like or callable, optional
+        The sensor's temperature (°C or K, only differences matter) at each
+        sample: an array of ``round(duration·rate)`` values (see
+        :func:`temperature_profile`) or a function of the time array
+        ``t_i = i/rate`` (s) returning them. Without ``tempco`` it has no effect.
+    tempco : float or sequence of float, optional
+        Temperature sensitivity of the bias: ``c1`` (output unit per kelvin)
+        adds ``c1·(T − T̄)``; a sequence ``(c1, c2, …)`` adds the polynomial
+        ``Σ_k c_k·(T − T̄)^k`` (unit/K^k). ``T̄`` is the mean of the profile, so
+        the bias at the mean temperature stays ``bias``. Needs ``temperature``.
 
     Returns
     -------
@@ -88,6 +108,8 @@ def simulate(
     angle noise of σ = Q differenced (AVAR exactly ``3Q²/τ²``); R as the ramp
     ``R·(t − T/2)``; Gauss–Markov by the exact AR(1) recursion
     ``x_k = φx_{k−1} + σ√(1−φ²)w_k``, ``φ = e^{−τ0/τ_c}``, started stationary.
+    The environment is deterministic and added before quantisation:
+    ``A·e^{−t/T} + Σ_k c_k (T(t) − T̄)^k``.
 
     Examples
     --------
@@ -98,6 +120,11 @@ def simulate(
     >>> y = simulate(duration=10.0, rate=100.0, unit="deg/s", N=0.004, B=0.001, rng=2)
     >>> y.size
     1000
+    >>> temp = temperature_profile(600.0, 10.0, "ramp", low=20.0, high=40.0)
+    >>> y = simulate(duration=600.0, rate=10.0, N=0.01, warmup=(0.5, 30.0),
+    ...              temperature=temp, tempco=0.002, rng=3)
+    >>> y.size == temp.size
+    True
     """
     pre = _resolve_preset(preset)
     su, rate_f, n = _unit_rate_and_length(pre, unit, rate, duration)
@@ -108,6 +135,8 @@ def simulate(
     y = _five_terms(coef, n, rate_f, bias, flicker, gen)
     if gauss_markov is not None:
         _add_gauss_markov(y, gauss_markov, rate_f, gen)
+    if warmup is not None or temperature is not None or tempco is not None:
+        _add_environment(y, rate_f, warmup, temperature, tempco)
     if lsb is not None:
         step = _level(lsb, "lsb")
         if step > 0:
@@ -223,3 +252,98 @@ def _add_gauss_markov(y: np.ndarray, gauss_markov: Any, rate_f: float, gen: np.r
         w = gen.standard_normal(y.size) * sigma * math.sqrt(1.0 - phi * phi)
         w[0] = sigma * gen.standard_normal()
         y += lfilter([1.0], [1.0, -phi], w)
+
+
+def _add_environment(y: np.ndarray, rate_f: float, warmup: Any, temperature: Any, tempco: Any) -> None:
+    """Add, in place, the warm-up transient and the temperature-dependent bias (see :func:`simulate`)."""
+    t = np.arange(y.size) / rate_f
+    if warmup is not None:
+        try:
+            amplitude, time_constant = (float(v) for v in warmup)
+        except (TypeError, ValueError):
+            raise ParameterError(f"warmup={warmup!r} must be (amplitude, time_constant)") from None
+        if not (math.isfinite(amplitude) and math.isfinite(time_constant) and time_constant > 0):
+            raise ParameterError(f"warmup={warmup!r} needs a finite amplitude and time_constant > 0 (s)")
+        y += amplitude * np.exp(-t / time_constant)
+    if tempco is None:
+        if temperature is not None:
+            _temperature_at(temperature, t)  # checked even when it has no effect
+        return
+    if temperature is None:
+        raise ParameterError("tempco needs temperature= (an array or a function of time)")
+    coeffs = np.atleast_1d(np.asarray(tempco, dtype=np.float64)) if not isinstance(tempco, str) else None
+    if coeffs is None or coeffs.ndim != 1 or coeffs.size == 0 or not np.isfinite(coeffs).all():
+        raise ParameterError(f"tempco={tempco!r} must be a finite number or a sequence (c1, c2, ...)")
+    dt = _temperature_at(temperature, t)
+    dt = dt - dt.mean()
+    for k, c in enumerate(coeffs, start=1):
+        y += c * dt ** k
+
+
+def _temperature_at(temperature: Any, t: np.ndarray) -> np.ndarray:
+    """The temperature at each sample time: the array given, or the function evaluated on ``t``."""
+    values = temperature(t) if callable(temperature) else temperature
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError("temperature must be numeric (an array or a function of time returning one)") from None
+    if arr.ndim == 0:
+        arr = np.full(t.size, float(arr))
+    if arr.shape != t.shape:
+        raise ParameterError(f"temperature has shape {arr.shape}; the record has {t.size} samples")
+    if not np.isfinite(arr).all():
+        raise ParameterError("temperature must be finite at every sample (simulate a gap in the samples instead)")
+    return arr
+
+
+def temperature_profile(duration: float, rate: float, kind: Literal["ramp", "cycle"] = "ramp", *,
+                        low: float = 20.0, high: float = 40.0, period: Optional[float] = None) -> np.ndarray:
+    """A temperature record for :func:`simulate` (``temperature=``) and for a temperature column.
+
+    Parameters
+    ----------
+    duration : float
+        Record length in seconds; ``round(duration·rate)`` samples, as in :func:`simulate`.
+    rate : float
+        Sample rate in Hz.
+    kind : {"ramp", "cycle"}
+        ``"ramp"``: linear from ``low`` to ``high`` over the record,
+        ``T(t) = low + (high − low)·t/t_last``. ``"cycle"``: a raised cosine starting at
+        ``low``, ``T(t) = low + (high − low)·(1 − cos(2πt/period))/2``.
+    low, high : float
+        The temperature range (°C).
+    period : float, optional
+        The cycle's period in seconds (default: the record length, one cycle).
+
+    Returns
+    -------
+    numpy.ndarray
+        The temperature at ``t_i = i/rate``.
+
+    Notes
+    -----
+    A ramp is the thermal-ramp test of IEEE Std 952-1997 (bias temperature sensitivity from
+    a slow, monotonic temperature change); a cycle separates a temperature dependence from a
+    drift in time, which a single ramp cannot.
+
+    Examples
+    --------
+    >>> temperature_profile(4.0, 1.0, "ramp", low=20.0, high=26.0).tolist()
+    [20.0, 22.0, 24.0, 26.0]
+    """
+    rate_f = check_rate(rate)
+    n = int(round(_level(duration, "duration") * rate_f))
+    if n < 2:
+        raise ParameterError(f"duration={duration!r} at rate={rate_f:g} Hz gives {n} samples; need at least 2")
+    if kind not in ("ramp", "cycle"):
+        raise ParameterError(f"kind={kind!r} must be 'ramp' or 'cycle'")
+    lo, hi = float(low), float(high)
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ParameterError(f"low={low!r} and high={high!r} must be finite temperatures")
+    t = np.arange(n) / rate_f
+    if kind == "ramp":
+        return lo + (hi - lo) * t / t[-1]
+    per = float(duration) if period is None else float(period)
+    if not (math.isfinite(per) and per > 0):
+        raise ParameterError(f"period={period!r} must be a positive number of seconds")
+    return lo + (hi - lo) * 0.5 * (1.0 - np.cos(2.0 * math.pi * t / per))

@@ -12,7 +12,11 @@ is JSON-safe for results.json.
 * :func:`outliers` — median-absolute-deviation check, report or replace by gaps;
 * :func:`fill` — fill gaps by linear interpolation;
 * :func:`part` — keep a sample or time range;
-* :func:`average` — decimate by an averaging factor.
+* :func:`average` — decimate by an averaging factor;
+* :func:`warmup` — detect the settling of the bias after power-on and cut it off
+  (:func:`drop_warmup` cuts a given duration);
+* :func:`temperature_fit` — fit the bias against temperature and remove its
+  temperature-dependent part.
 
 Layer: beside ``stats`` and ``noise``; it may import ``sigmatau.errors``, ``sigmatau.core``, numpy
 and scipy only, and nothing below the entry points imports it except the pipeline and the CLI.
@@ -25,6 +29,8 @@ from ._edit import average, fill, gap_runs, part
 from ._offset import frequency_offset
 from ._outliers import outliers
 from ._result import Estimate, PrepResult, PrepWarning
+from ._temperature import temperature_fit
+from ._warmup import drop_warmup, warmup
 
 __all__ = [
     "PrepResult",
@@ -36,6 +42,9 @@ __all__ = [
     "fill",
     "part",
     "average",
+    "warmup",
+    "drop_warmup",
+    "temperature_fit",
     "gap_runs",
     "DRIFT_MODELS",
     "NOMINAL_NOISE",
