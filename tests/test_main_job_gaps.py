@@ -101,7 +101,9 @@ def test_cli_preparation_options_and_errors(logs, tmp_path, capsys):
                             "--part", "10:1000", "--outliers", "5", "--drift", "linear", "--average", "4"], capsys)
     assert code == 0, err
     data = json.loads((out / "results.json").read_text())
-    assert [s["step"] for s in data["channels"][0]["prep"]] == ["part", "outliers", "drift", "average"]
+    # the warm-up check runs by default (its record says what it found, here nothing)
+    assert [s["step"] for s in data["channels"][0]["prep"]] == ["part", "warmup", "outliers", "drift", "average"]
+    assert data["channels"][0]["prep"][1]["details"]["detected"] is False
     assert "<h3>Preparation</h3>" in (out / "report.html").read_text()
     for argv, pattern in ((["--outliers", "-1"], "--outliers -1.0 must be a positive number"),
                           (["--part", "ten:20"], "--part: part='ten:20' must be START:END"),
@@ -164,3 +166,54 @@ def test_simulate_drops_samples_and_analyze_marks_them(tmp_path, capsys):
         assert code == 2 and pattern in err, (argv, err)
     code, _, err = run_cli(["simulate", str(tmp_path / "e.npy"), "--drop", "0.1"], capsys)
     assert code == 2 and "write .csv or .npz" in err
+
+
+@pytest.fixture(scope="module")
+def warm_and_ramp(tmp_path_factory):
+    """The same simulated 30 min, 100 Hz IMU log clean and with a warm-up (gyro 3e-4 rad/s,
+    T = 60 s) and a 20→40 °C ramp acting through known tempcos (gyro 2e-5 rad/s/K, accel
+    1e-4 m/s²/K), written by `sigmatau simulate`."""
+    d = tmp_path_factory.mktemp("warm")
+    common = ["--duration", "1800", "--rate", "100", "--seed", "3"]
+    from sigmatau.cli import main
+
+    assert main(["simulate", str(d / "clean.csv"), *common, "--quiet"]) == 0
+    assert main(["simulate", str(d / "env.csv"), *common, "--temperature", "ramp:20:40", "--gyro-tempco", "2e-5",
+                 "--accel-tempco", "1e-4", "--gyro-warmup", "3e-4:60", "--quiet"]) == 0
+    return d / "clean.csv", d / "env.csv"
+
+
+def test_warm_up_and_temperature_ramp_give_the_clean_answer(warm_and_ramp):
+    clean_path, env_path = warm_and_ramp
+    plain = Preparation(warmup="auto", temperature="auto")
+    clean = analyze_log(io.read(clean_path), statistics="oadev", prep=plain)
+    env = analyze_log(io.read(env_path), statistics="oadev", prep=plain)
+    assert not any(n.startswith("warm-up: detected") for n in clean.notes)
+    assert any(n.startswith("warm-up: detected on gyro_x, gyro_y, gyro_z") for n in env.notes)
+    assert any(n.startswith("temperature: the bias of gyro_x") for n in env.notes)
+    for c, e in zip(clean.channels, env.channels):
+        steps = [s["step"] for s in e.prep]
+        assert steps == ["warmup", "temperature"], steps
+        tc = e.prep[1]["estimates"]["tempco"]
+        truth = 2e-5 if c.name.startswith("gyro") else 1e-4
+        assert abs(tc["value"] - truth) < 3 * tc["stderr"], (c.name, tc)
+        if c.name.startswith("gyro"):
+            assert e.prep[1]["tempco_customary"]["unit"] == "deg/h/degC"
+        assert "oadev_raw" in e.results  # the uncompensated curve, drawn beside
+        pc, pe = c.model.N, e.model.N
+        assert pe.low <= pc.high and pc.low <= pe.high, (c.name, pc, pe)
+    for key in ("gyroscope_noise_density", "accelerometer_noise_density"):
+        assert abs(env.kalibr[key] / clean.kalibr[key] - 1) < 0.01, key
+    # the ramp left in: the uncompensated curve rises at long τ, the compensated one does not
+    gx = env.channels[0]
+    assert gx.results["oadev_raw"].dev[-1] > 3 * gx.results["oadev"].dev[-1]
+
+
+def test_warm_up_kept_and_temperature_off_analyse_the_record_as_recorded(warm_and_ramp):
+    _, env_path = warm_and_ramp
+    a = analyze_log(io.read(env_path), statistics="oadev", prep=Preparation(warmup="keep", temperature="off"))
+    assert not a.channels[0].prep and "oadev_raw" not in a.channels[0].results
+    b = analyze_log(io.read(env_path), statistics="oadev", prep=Preparation(warmup=100.0))
+    assert b.channels[0].prep[0]["details"]["mode"] == "given" and b.channels[0].n_samples == 180_000 - 10_000
+    with pytest.raises(Exception, match="warmup='soon' must be 'auto', 'keep' or a non-negative number"):
+        Preparation(warmup="soon")

@@ -193,6 +193,12 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
     pr.add_argument("--drift", metavar="MODEL",
                     help="remove the drift: linear, bisection, log or diffusion (frequency/rate data);"
                          " quadratic, diff2, 3point or greenhall (phase data)")
+    pr.add_argument("--warmup", default="auto", metavar="auto|keep|SECONDS",
+                    help="the settling of the bias after power-on: auto (default: detected on the gyro and accel"
+                         " channels and left out, saying so), keep, or a number of seconds to leave out")
+    pr.add_argument("--temperature", choices=["auto", "off"], default="auto",
+                    help="auto (default): with a temperature column, fit each gyro and accel channel's bias"
+                         " against it and analyse the compensated residual (the raw curve beside it); off")
     pr.add_argument("--average", type=int, metavar="M", help="average M consecutive samples (rate becomes rate/M)")
     g.add_argument("--dynamic", metavar="WINDOW:STEP",
                    help="also OADEV over sliding windows of WINDOW seconds every STEP seconds, a heat map and a"
@@ -211,7 +217,16 @@ def _preparation(args: argparse.Namespace) -> Any:
         part = None if args.part is None else parse_part(args.part)
     except ParameterError as exc:
         raise _UsageError(f"--part: {exc}") from None
-    prep = Preparation(part=part, outliers=args.outliers, drift=args.drift, average=args.average)
+    warm: Any = args.warmup
+    if warm not in ("auto", "keep"):
+        try:
+            warm = float(warm)
+        except ValueError:
+            raise _UsageError(f"--warmup {args.warmup!r} must be auto, keep or a number of seconds") from None
+        if not (math.isfinite(warm) and warm >= 0):
+            raise _UsageError(f"--warmup {args.warmup!r} must be auto, keep or a non-negative number of seconds")
+    prep = Preparation(part=part, warmup=warm, temperature=args.temperature, outliers=args.outliers,
+                       drift=args.drift, average=args.average)
     return prep if prep else None
 
 

@@ -24,8 +24,10 @@ DEMO_IMU = {
 
 
 def _simulated_imu(duration: float, rate: float, seed: int, *, gyro_unit: str = "rad/s",
-                   accel_unit: str = "m/s^2", spec: Optional[dict] = None) -> dict[str, Any]:
-    """Six channels simulated with :func:`sigmatau.imu.simulate`, independent seeded streams."""
+                   accel_unit: str = "m/s^2", spec: Optional[dict] = None,
+                   env: Optional[dict] = None) -> dict[str, Any]:
+    """Six channels simulated with :func:`sigmatau.imu.simulate`, independent seeded streams;
+    ``env[group]`` holds its ``warmup=``, ``temperature=`` and ``tempco=`` (in the unit written)."""
     import numpy as np
 
     from ..imu.model import simulate
@@ -43,7 +45,8 @@ def _simulated_imu(duration: float, rate: float, seed: int, *, gyro_unit: str = 
         coefs = {t: float(convert(v, term_unit(si, t), term_unit(unit, t))) for t, v in s.items() if t in "QNBKR"}
         for axis in "xyz":
             out[f"{group}_{axis}"] = simulate(s.get("preset"), duration=duration, rate=rate, unit=unit,
-                                              rng=np.random.default_rng(streams[j]), **coefs)
+                                              rng=np.random.default_rng(streams[j]), **coefs,
+                                              **((env or {}).get(group) or {}))
             j += 1
     return out
 
@@ -113,8 +116,12 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
     n = int(round(args.duration * rate))
     if n < 2:
         raise _UsageError(f"--duration {args.duration:g} s at {rate:g} Hz gives fewer than 2 samples")
+    env, temperature = _environment(args, groups, n, rate)
     chans = _simulated_imu(args.duration, rate, args.seed, gyro_unit=units["gyro"], accel_unit=units["accel"],
-                           spec=spec)
+                           spec=spec, env=env)
+    if temperature is not None:
+        chans["temperature"] = temperature
+        units["temperature"] = "degC"
     t = np.arange(n) / rate
     keep = _kept_samples(args, n, rate, suffix)
     if keep is not None:
@@ -135,6 +142,40 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
         _say(f"  columns col0..col{len(chans) - 1} = {', '.join(chans)}; no timestamps: read it with"
              f" --rate {rate:g}", err=True)
     return EXIT_OK
+
+
+def _environment(args: argparse.Namespace, groups: list[str], n: int, rate: float) -> tuple[dict, Optional[Any]]:
+    """``simulate()`` keywords per group from ``--temperature``, ``--{group}-tempco`` and
+    ``--{group}-warmup``, and the temperature column (None without ``--temperature``)."""
+    from ..imu.model import temperature_profile
+
+    env: dict[str, dict] = {g: {} for g in groups}
+    temperature = None
+    if args.temperature is not None:
+        kind, *lims = args.temperature.split(":")
+        try:
+            low, high = (float(v) for v in lims) if lims else (20.0, 40.0)
+        except ValueError:
+            raise _UsageError(f"--temperature {args.temperature!r} must be ramp or cycle, optionally"
+                              " with :LOW:HIGH in °C (e.g. ramp:20:40)") from None
+        if kind not in ("ramp", "cycle"):
+            raise _UsageError(f"--temperature {args.temperature!r} must be ramp or cycle (e.g. ramp:20:40)")
+        temperature = temperature_profile(n / rate, rate, kind, low=low, high=high)
+    for g in groups:
+        tc, wu = getattr(args, f"{g}_tempco"), getattr(args, f"{g}_warmup")
+        if tc is not None:
+            if temperature is None:
+                raise _UsageError(f"--{g}-tempco needs --temperature ramp|cycle")
+            env[g].update(temperature=temperature, tempco=tc)
+        if wu is not None:
+            try:
+                a, tau = (float(v) for v in wu.split(":"))
+            except ValueError:
+                raise _UsageError(f"--{g}-warmup {wu!r} must be AMPLITUDE:TIME_CONSTANT (unit written, s)") from None
+            if not tau > 0:
+                raise _UsageError(f"--{g}-warmup {wu!r}: the time constant must be positive")
+            env[g]["warmup"] = (a, tau)
+    return env, temperature
 
 
 def _kept_samples(args: argparse.Namespace, n: int, rate: float, suffix: str) -> Optional[Any]:
@@ -228,6 +269,14 @@ def add_cli(sub: Any) -> None:
                              help=f"{g} {what} (SI when no unit)")
     sim.add_argument("--h", help="power-law noise instead: levels like 'h0=1e-20,h-1=1e-23' (alpha 2 … -4)")
     sim.add_argument("--data-type", choices=["freq", "phase"], default="freq", help="with --h: what to write")
+    sim.add_argument("--temperature", metavar="ramp|cycle[:LOW:HIGH]",
+                     help="write a temperature column (°C; default range 20:40) that --gyro-tempco and"
+                          " --accel-tempco act on")
+    for g in ("gyro", "accel"):
+        sim.add_argument(f"--{g}-tempco", dest=f"{g}_tempco", type=float, metavar="VALUE",
+                         help=f"{g} bias temperature coefficient, in the {g} unit written per °C")
+        sim.add_argument(f"--{g}-warmup", dest=f"{g}_warmup", metavar="A:T",
+                         help=f"{g} warm-up transient A·exp(−t/T): amplitude in the unit written, T in s")
     sim.add_argument("--drop", type=float, metavar="SHARE",
                      help="leave out this share of the samples, scattered (dropped messages; .csv/.npz)")
     sim.add_argument("--gap", action="append", default=[], metavar="START:DURATION",

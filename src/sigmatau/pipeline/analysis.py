@@ -294,6 +294,20 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
                            seconds=time.perf_counter() - t0, dynamic=dyn, dynamic_note=dyn_note)
 
 
+def _with_raw(ch: ChannelAnalysis, raw: Mapping[str, np.ndarray], log: Any, taus: Any,
+              confidence: float) -> ChannelAnalysis:
+    """The channel with ``oadev_raw``, the OADEV of its samples before the temperature compensation
+    (drawn beside the compensated curve), when it was compensated."""
+    if ch.name not in raw or "oadev" not in ch.results:
+        return ch
+    from ..stats.allan import oadev
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SigmaTauWarning)
+        before = oadev(raw[ch.name], rate=log.rate, data_type=log.data_type, taus=taus, confidence=confidence)
+    return dataclasses.replace(ch, results={**ch.results, "oadev_raw": before})
+
+
 def _dynamic(x: np.ndarray, log: Any, spec: tuple[float, float], confidence: float) -> tuple[Any, str]:
     """OADEV over sliding windows of ``spec = (window, step)`` seconds, or None and why not."""
     from ..stats.dynamic import dynamic
@@ -481,14 +495,17 @@ def analyze_log(
         raise ParameterError(f"theoh={theoh!r} must be 'fast' or 'exact'")
     reference = datasheet_reference(datasheet)
     log, notes = _longest_segment(log)
-    log, prepared = prepare_log(log, prep)
-    if prep:
+    prepared = prepare_log(log, prep)
+    log = prepared.log
+    if prep and prep.describe():
         notes.append(f"prepared every channel: {prep.describe()}")
+    notes.extend(prepared.notes)
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names), max((log[n].nbytes for n in names), default=0))
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
                                    theoh, on_step, dynamic)
-    done = [dataclasses.replace(c, prep=prepared.get(c.name, ())) for c in done]
+    done = [_with_raw(dataclasses.replace(c, prep=prepared.records.get(c.name, ())), prepared.raw, log, taus,
+                      float(confidence)) for c in done]
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",

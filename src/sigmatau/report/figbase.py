@@ -52,7 +52,8 @@ _MARKERS = {"oadev": "o", "adev": "o", "mdev": "s", "mtotdev": "s", "ohdev": "^"
 _DISPLAY = {"oadev": "OADEV", "adev": "ADEV", "mdev": "MDEV", "tdev": "TDEV", "hdev": "HDEV",
             "ohdev": "OHDEV", "totdev": "TOTDEV", "mtotdev": "MTOTDEV", "ttotdev": "TTOTDEV",
             "htotdev": "HTOTDEV", "theo1": "Theo1", "theobr": "TheoBR", "theoh": "TheoH",
-            "stdev": "STDEV", "ostdev": "OSTDEV", "mtie": "MTIE", "tierms": "TIE rms"}
+            "stdev": "STDEV", "ostdev": "OSTDEV", "mtie": "MTIE", "tierms": "TIE rms",
+            "oadev_raw": "OADEV before temperature compensation"}
 #: Statistics in the phase (time-error) unit: drawn on a right-hand axis.
 _TIME_STATS = frozenset({"tdev", "ttotdev", "mtie", "tierms"})
 #: Statistics drawn prominently (the one the IMU model is read from).
