@@ -163,7 +163,10 @@ def prepare_log(log: Any, prep: Optional[Preparation]) -> Prepared:
             kept = r.details["range"]
         t = None if t is None else t[kept[0]:kept[1]]
     if prep.warmup is not None:
-        cut = _warmup_cut(log, channels, prep.warmup, records, notes)
+        looked_at = channels
+        if prep.warmup == "auto" and prep.temperature is not None:
+            looked_at = _without_temperature_dependence(log, channels)
+        cut = _warmup_cut(log, channels, prep.warmup, records, notes, looked_at)
         if cut:
             channels = {k: v[cut:] for k, v in channels.items()}
             t = None if t is None else t[cut:]
@@ -212,10 +215,13 @@ def _sensor_channels(log: Any, channels: dict) -> list[str]:
     return [n for n in channels if log.group_of(n) in _SENSOR_GROUPS]
 
 
-def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict, notes: list) -> int:
+def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict, notes: list,
+                looked_at: Optional[dict] = None) -> int:
     """Samples to leave out at the start: the latest warm-up end found on the gyro and accel
-    channels (``"auto"``), or the given seconds. Each channel's record is appended."""
+    channels (``"auto"``, on ``looked_at``: the channels or their temperature-compensated
+    forms), or the given seconds. Each channel's record is appended."""
     sensors = _sensor_channels(log, channels)
+    looked_at = channels if looked_at is None else looked_at
     if mode != "auto":
         cut = int(round(float(mode) * log.rate))
         for name in channels:
@@ -228,7 +234,7 @@ def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict
     ends = {}
     for name in sensors:
         try:
-            r = _noted(lambda: warmup(channels[name], rate=log.rate), f"warm-up of {name}", notes)
+            r = _noted(lambda: warmup(looked_at[name], rate=log.rate), f"warm-up of {name}", notes)
         except DataError as exc:
             notes.append(f"warm-up of {name} not estimated: {exc}")
             continue
@@ -244,6 +250,40 @@ def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict
     notes.append(f"warm-up: detected on {', '.join(ends)}; every channel analysed from {cut / log.rate:.6g} s"
                  f" ({cut} samples left out, the end found on {last}; --warmup keep to keep them)")
     return cut
+
+
+def _without_temperature_dependence(log: Any, channels: dict) -> dict:
+    """The gyro and accel channels less a first estimate of their temperature dependence, for the
+    warm-up search: a temperature ramp left in reads as bias wander to the warm-up's noise model
+    and ends the transient early (docs/warmup-temperature.md). The dependence is fitted after a
+    first warm-up cut, then removed from the whole record (each channel as it is when it fails)."""
+    temps = [n for n in channels if log.group_of(n) == "temperature"]
+    sensors = _sensor_channels(log, channels)
+    if not temps or not sensors:
+        return channels
+    temp = channels[temps[0]]
+    out = dict(channels)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", SigmaTauWarning)  # the final passes report what matters
+        for name in sensors:
+            x = channels[name]
+            try:
+                first = warmup(x, rate=log.rate)
+                cut = int(first.details.get("end_index") or 0) if first.details.get("detected") else 0
+                fit = temperature_fit(x[cut:], temp[cut:], rate=log.rate)
+            except DataError:
+                continue
+            out[name] = x - _temperature_part(fit, temp)
+    return out
+
+
+def _temperature_part(fit: Any, temp: np.ndarray) -> np.ndarray:
+    """The fitted temperature-dependent bias, Σ_j c_j·(T − T_ref)^j (j ≥ 1), at every sample."""
+    dt = temp - fit.details["reference_temperature"]
+    out = np.zeros_like(dt)
+    for j in range(1, int(fit.details["order"]) + 1):
+        out += fit.estimates[f"c{j}"].value * dt ** j
+    return np.where(np.isnan(out), 0.0, out)
 
 
 def _compensate(log: Any, channels: dict, records: dict, raw: dict, notes: list) -> None:
