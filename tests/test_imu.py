@@ -198,11 +198,17 @@ def test_lsm6dsl_like_with_flicker():
     assert m.readoff["B"].value * B_FACTOR == pytest.approx(m.readoff["B"].value * 0.6643, rel=1e-3)
 
 
-def test_gauss_markov_hump_is_flagged_as_a_model_misfit():
+def test_gauss_markov_hump_is_flagged_as_a_model_misfit_of_the_five_terms():
+    # Without the Gauss–Markov term the hump is a misfit of the five-term model, flagged; by
+    # default the GM term is fitted and explains it (tests/test_imu_gauss_markov.py).
     y = simulate(duration=3600.0, rate=100.0, unit="rad/s", N=1e-4, gauss_markov=(5e-4, 20.0), rng=9)
     with pytest.warns(ImuWarning):
-        m = analyze(y, rate=100.0, unit="rad/s")
+        m = analyze(y, rate=100.0, unit="rad/s", gauss_markov="never")
     assert any(f.code in ("model", "disagreement") for f in m.flags)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ImuWarning)
+        gm = analyze(y, rate=100.0, unit="rad/s")
+    assert gm.gauss_markov is not None and not any(f.code == "model" for f in gm.flags)
 
 
 # ------------------------------------------------------------- short records

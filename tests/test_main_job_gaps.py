@@ -253,3 +253,22 @@ def test_warm_up_searched_without_the_temperature_dependence_keeps_the_tempco_un
     p = 0.9545
     assert hits["pipeline"] / trials > p - 3 * np.sqrt(p * (1 - p) / trials), hits
     assert hits["pipeline"] - hits["single"] >= trials // 4, hits
+
+
+def test_gauss_markov_term_in_the_main_job(tmp_path, capsys):
+    from sigmatau.analysis import log_from_arrays
+
+    y = simulate(duration=3600.0, rate=RATE, unit="rad/s", N=1e-4, gauss_markov=(5e-4, 20.0), rng=9)
+    log = log_from_arrays({"gyro_x": y}, rate=RATE, units={"gyro_x": "rad/s"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sigmatau.SigmaTauWarning)
+        a = analyze_log(log, statistics="oadev")
+        never = analyze_log(log, statistics="oadev", gauss_markov="never")
+    gm = a.channels[0].model.gauss_markov
+    # chosen, and near the truth (coverage of its intervals: tests/test_imu_gauss_markov.py)
+    assert gm is not None and 2 / 3 < gm.sigma.value / 5e-4 < 1.5 and 0.5 < gm.tau_c.value / 20.0 < 2.0
+    assert "GM (Gauss–Markov)" in a.summary() and a.settings["gauss_markov"] == "auto"
+    assert a.channels[0].to_dict()["model"]["gauss_markov"] is not None
+    assert never.channels[0].model.gauss_markov is None and "GM (Gauss–Markov)" not in never.summary()
+    with pytest.raises(Exception, match="gauss_markov='sometimes' must be"):
+        analyze_log(log, statistics="oadev", gauss_markov="sometimes")

@@ -200,6 +200,9 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
                     help="auto (default): with a temperature column, fit each gyro and accel channel's bias"
                          " against it and analyse the compensated residual (the raw curve beside it); off")
     pr.add_argument("--average", type=int, metavar="M", help="average M consecutive samples (rate becomes rate/M)")
+    g.add_argument("--gauss-markov", choices=["auto", "never", "always"], default="auto",
+                   help="the IMU model's first-order Gauss–Markov term (σ, correlation time): auto (default: kept"
+                        " when BIC prefers it to the five terms), never, always")
     g.add_argument("--dynamic", metavar="WINDOW:STEP",
                    help="also OADEV over sliding windows of WINDOW seconds every STEP seconds, a heat map and a"
                         " check that the windows agree within their intervals (non-stationarity)")
@@ -417,7 +420,8 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
                                model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
                                rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
                                progress=display.line, theoh=args.theoh, on_step=display.event,
-                               prep=_preparation(args), dynamic=_dynamic_spec(args))
+                               prep=_preparation(args), dynamic=_dynamic_spec(args),
+                               gauss_markov=args.gauss_markov)
     finally:
         display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]

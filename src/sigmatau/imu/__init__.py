@@ -4,7 +4,8 @@ What it holds: the public face of the model (``model``, re-exported here as
 ``sigmatau.imu.*``) and its parts — the terms and their constants (``terms``),
 the result types (``results``, ``noisemodel``), part presets (``presets``),
 simulation (``simulation``), read-offs (``readoffs``), the weighted fit and its
-intervals (``fitting``), ``analyze`` itself (``extraction``), the design tip's
+intervals (``fitting``), the first-order Gauss–Markov term chosen against the five
+terms by BIC (``gaussmarkov``), ``analyze`` itself (``extraction``), the design tip's
 answers (``answers``), Kalibr values (``kalibr``); units and conversions
 (``units``); data checks of samples (``checks``) and timestamps
 (``timestamps``). What it may import: the statistics, uncertainty, noise and

@@ -30,10 +30,11 @@ from ..uncertainty.confidence import ONE_SIGMA, edf_array
 from . import checks as checks_module
 from .checks import DataChecks, check_samples
 from .fitting import _Fit, _fit_model, _fit_parameters
+from .gaussmarkov import GM_MODES, _choose, _Choice, _gm_result
 from .noisemodel import NoiseModel
 from .readoffs import _readoffs
 from .results import Flag, Parameter, Region
-from .terms import _NAMES, ImuWarning
+from .terms import _NAMES, ImuWarning, _gm_column
 from .units import TERMS, SensorUnit, pretty, sensor_unit
 
 __all__ = ["analyze", "from_curve", "DEVIATION_RANGE"]
@@ -106,6 +107,7 @@ def analyze(
     lsb: Optional[float] = None,
     odr: Optional[float] = None,
     full_scale: Optional[float] = None,
+    gauss_markov: Literal["auto", "never", "always"] = "auto",
 ) -> NoiseModel:
     """Extract the IMU noise model (Q, N, B, K, R) of one channel, with intervals.
 
@@ -142,6 +144,11 @@ def analyze(
     lsb, odr, full_scale : float, optional
         Passed to the data checks (known LSB, the sensor's own output rate,
         its full scale), all in ``unit``.
+    gauss_markov : {"auto", "never", "always"}
+        A first-order Gauss–Markov term (σ_GM, T_c) beside the five: kept when
+        the Bayesian information criterion favours it by a clear margin
+        (``"auto"``), never considered (``"never"``: the five-term model alone),
+        or always fitted (``"always"``). See *Gauss–Markov* below.
 
     Returns
     -------
@@ -221,6 +228,25 @@ def analyze(
     zσ_c)`` and ``√(c + zσ_c)`` of a refit of the selected terms with it forced
     in (one-sided at ``(1 + p)/2``).
 
+    *Gauss–Markov.* A first-order GM process (variance σ², correlation time
+    T) adds ``σ²·(2T/τ)[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]`` (exact form of
+    the sampled process: :func:`sigmatau.imu.gaussmarkov.gauss_markov_avar`).
+    The fit is linear in σ² and profiled over T on a log grid spanning the τ of
+    the curve (20 per decade, then refined); the five-term model and five terms
+    + GM (both without discrepancy floor) are compared by
+    ``BIC = χ²·ν/E[χ²] + k·ln n_eff`` (χ² scaled to its Satterthwaite EDF ν,
+    ``n_eff = ν + p``), the GM costing two parameters; it is kept when ΔBIC >
+    10 and its T is not at an end of the grid, and (with ``"auto"``) only if
+    the white noise N stays in the model: white noise through a first-order
+    low-pass filter is itself a GM process, which would otherwise replace N on
+    filtered sensors. The chosen model is then fitted
+    as above (discrepancy, selection, the unconstrained fit behind every
+    interval, so that N, B and K trade off against the GM term in their
+    intervals). σ_GM's interval is from that fit's covariance at the chosen T,
+    T_c's from the profile of the chosen model's scaled χ² (Δ below the χ²₁
+    quantile). The read-offs are taken on the curve with the GM share
+    subtracted.
+
     *Comparison.* Read-off and fit intervals that do not overlap, or a term
     resolved by one method above the other's bound, are flagged; so are
     unresolved terms, quantisation and other data problems, the filter term
@@ -245,6 +271,8 @@ def analyze(
     (False, False)
     """
     su, conf, terms = _check_options(unit, confidence, terms, min_significance)
+    if gauss_markov not in GM_MODES:
+        raise ParameterError(f"gauss_markov={gauss_markov!r} must be one of {GM_MODES}")
     if isinstance(samples, StabilityResult):
         result = samples
         rate_f, n_samples = _check_result(result, rate)
@@ -259,9 +287,10 @@ def analyze(
     _check_deviation_range(np.asarray(result.dev, float))
     t_s, d_s, nu_s = _usable_points(result, rate_f, terms, min_significance)
 
-    fit = _fit_model(t_s, d_s**2, nu_s, rate_f, terms, min_significance)
-    readoff, regions = _readoffs(t_s, d_s, nu_s, conf, su, terms, rate_f, fit.full_coef, fit.full_gain,
-                                 fit.var_cov)
+    fit, choice = _fit_with_gm(t_s, d_s**2, nu_s, rate_f, terms, min_significance, gauss_markov)
+    gm = _gm_result(t_s, d_s**2, nu_s, rate_f, fit, choice, conf, su, gauss_markov) if choice.chosen else None
+    ro_t, ro_d, ro_nu, ro_gain, ro_vcov = _without_gm(fit, t_s, d_s, nu_s, rate_f)
+    readoff, regions = _readoffs(ro_t, ro_d, ro_nu, conf, su, terms, rate_f, fit.full_coef[:5], ro_gain, ro_vcov)
     fitted = _fit_parameters(fit, conf, su, terms, t_s)
     primary = _primary(fitted, su, conf)
     flags += _compare(readoff, fitted, regions, t_s)
@@ -271,9 +300,67 @@ def analyze(
         kind=su.kind, unit=su.name, rate=rate_f, n_samples=n_samples, confidence=conf,
         readoff=readoff, fit=fitted, regions=regions, fit_terms=fit.kept, fit_chi2=fit.chi2, fit_dof=fit.dof,
         discrepancy=fit.eps, filter_time=fit.filter_time,
-        flags=tuple(flags), checks=data_checks, result=result, _coef=fit.coef, _cov=fit.cov,
+        flags=tuple(flags), checks=data_checks, result=result, _coef=fit.coef[:5], _cov=fit.cov[:5, :5],
+        gauss_markov=gm, gauss_markov_test=_gm_test(choice, gauss_markov, gm),
+        _gm=(float(fit.coef[5]), fit.gm_tau) if gm is not None and gm.resolved else None,
         **primary,
     )
+
+
+def _fit_with_gm(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, terms: Sequence[str],
+                 min_significance: float, mode: str) -> tuple[_Fit, _Choice]:
+    """The fit of the model chosen by :func:`~sigmatau.imu.gaussmarkov._choose`: five terms + GM when
+    the GM wins (and survives term selection), the five-term fit exactly as without the option otherwise."""
+    if mode == "never":
+        return _fit_model(taus, var, nu, rate, terms, min_significance), _Choice(
+            math.nan, False, math.nan, math.nan, "gauss_markov='never'")
+    choice = _choose(taus, var, nu, rate, terms, mode)  # type: ignore[arg-type]
+    if choice.chosen:
+        fit = _fit_model(taus, var, nu, rate, terms, min_significance, gm_tau=choice.tau)
+        if mode == "always":
+            return fit, choice
+        if "GM" not in fit.kept:
+            choice = choice._replace(chosen=False, reason=choice.reason + "; then dropped by term selection")
+        elif "N" in terms and "N" not in fit.kept:
+            # White noise through a first-order low-pass filter is a GM process: a GM term that
+            # takes the place of N is the sensor's filter (real accelerometer curves: T_c of
+            # ~14 samples, N dropped), which the five-term model holds as N and its 1/τ² term.
+            choice = choice._replace(chosen=False, reason=(
+                choice.reason + f"; rejected: the GM term (T_c = {choice.tau:.3g} s) replaces the white"
+                " noise N (filtered white noise is a GM process), N is kept instead"))
+        else:
+            return fit, choice
+    return _fit_model(taus, var, nu, rate, terms, min_significance), choice
+
+
+def _without_gm(fit: _Fit, taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, rate: float
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The curve the read-offs see: with a kept GM term, its share subtracted from each point's AVAR,
+    the points where it holds more than ¾ left out (as the read-offs leave out those of a neighbouring
+    term) and the EDF scaled by ``(net/σ²)²`` (same absolute variance, smaller level).
+
+    Returns ``(taus, dev, nu, gain, var_cov)`` of the points kept, the last two the fit's linear map to
+    the five coefficients and the modelled covariance of the points, restricted to them.
+    """
+    gain, vcov = fit.full_gain[:5], fit.var_cov
+    if "GM" not in fit.kept:
+        return taus, dev, nu, gain, vcov
+    var = dev**2
+    net = var - fit.coef[5] * _gm_column(taus, rate, fit.gm_tau)
+    keep = net > 0.25 * var
+    if keep.sum() < 3:
+        return taus, dev, nu, gain, vcov
+    return (taus[keep], np.sqrt(net[keep]), nu[keep] * (net[keep] / var[keep]) ** 2, gain[:, keep],
+            vcov[np.ix_(keep, keep)])
+
+
+def _gm_test(choice: _Choice, mode: str, gm: Any) -> dict[str, Any]:
+    """What was decided about a Gauss–Markov term, for results.json (also when it was not kept)."""
+    return {"mode": mode, "criterion": "BIC", "chosen": gm is not None and gm.resolved,
+            "delta_bic": None if not math.isfinite(choice.delta_bic) else float(choice.delta_bic),
+            "n_eff": None if not math.isfinite(choice.n_eff) else float(choice.n_eff),
+            "tau_c_best": None if not math.isfinite(choice.tau) else float(choice.tau),
+            "reason": choice.reason}
 
 
 def _check_options(unit: str, confidence: float, terms: Sequence[str], min_significance: float
@@ -397,9 +484,12 @@ def _model_flags(fit: _Fit, data_checks: Optional[DataChecks], primary: Mapping[
     floor that holds more than a tenth of N²."""
     flags = []
     if fit.eps > 0:
+        gm = "GM" in fit.kept
         flags.append(Flag("model", "", (
-            f"the curve departs from the five-term model beyond its statistical scatter (χ²/dof"
-            f" {fit.raw_chi2_dof:.3g}): a Gauss–Markov hump, a sinusoid, filtering, temperature drift or"
+            f"the curve departs from the {'five-term + Gauss–Markov' if gm else 'five-term'} model beyond its"
+            f" statistical scatter (χ²/dof {fit.raw_chi2_dof:.3g}): "
+            + ("a second correlated term, " if gm else "a Gauss–Markov hump, ")
+            + "a sinusoid, filtering, temperature drift or"
             f" non-stationarity? A discrepancy of {100 * fit.eps:.2g} % per τ was added to the uncertainty of"
             " every point, which widens the intervals")))
     if fit.filter_time > 0:

@@ -21,7 +21,7 @@ from ..errors import DataError
 from ..uncertainty.noiseid import OCTAVE_CORRELATION
 from ..uncertainty.powerfit import irls_fit
 from .results import Parameter
-from .terms import _ALPHA, _design
+from .terms import _ALPHA, _design, _gm_alpha, _gm_column
 from .units import TERMS, SensorUnit
 
 __all__: list[str] = []
@@ -54,9 +54,36 @@ def _correlation(taus: np.ndarray, alpha: np.ndarray) -> np.ndarray:
     return np.exp(-np.abs(coord[:, None] - coord[None, :]) ** _CORR_POWER)
 
 
+class _Cols(NamedTuple):
+    """The AVAR columns of the fit at the τ of the curve: Q², N², B², K², R², and the variance σ²
+    of a Gauss–Markov term of correlation time ``gm_tau`` as a sixth column when there is one."""
+
+    mat: np.ndarray        # n × k columns
+    alpha: np.ndarray      # n × k power-law α each column looks like at each τ (EDF, τ correlation)
+    names: tuple           # TERMS, then "GM"
+    gm_tau: float          # correlation time of the GM column (NaN without one)
+
+
+def _columns(taus: np.ndarray, rate: float, gm_tau: float = math.nan) -> _Cols:
+    """:class:`_Cols` of the five terms, plus the GM column when ``gm_tau`` is finite."""
+    mat = _design(taus, rate)
+    alpha = np.tile(np.array([_ALPHA[t] for t in TERMS]), (taus.size, 1))
+    if not math.isfinite(gm_tau):
+        return _Cols(mat, alpha, TERMS, math.nan)
+    mat = np.column_stack([mat, _gm_column(taus, rate, gm_tau)])
+    alpha = np.column_stack([alpha, _gm_alpha(taus, rate, gm_tau)])
+    return _Cols(mat, alpha, TERMS + ("GM",), float(gm_tau))
+
+
+def _dominant(design: _Cols, cols: list[int], sub_terms: np.ndarray) -> np.ndarray:
+    """α at each τ of the column (among ``cols``) that holds most of the fitted AVAR there."""
+    idx = np.asarray(cols)[np.argmax(sub_terms, axis=1)]
+    return design.alpha[np.arange(sub_terms.shape[0]), idx]
+
+
 class _Fit(NamedTuple):
-    coef: np.ndarray       # squared coefficients, all five (0 where dropped; Q may be < 0: filter)
-    cov: np.ndarray        # their covariance (5×5, zero rows for dropped terms)
+    coef: np.ndarray       # squared coefficients, all five (0 where dropped; Q may be < 0: filter), GM's σ² 6th
+    cov: np.ndarray        # their covariance (5×5 or 6×6, zero rows for dropped terms)
     kept: tuple[str, ...]  # terms kept with a positive, significant coefficient
     chi2: float
     dof: int
@@ -66,10 +93,11 @@ class _Fit(NamedTuple):
     filter_time: float     # τ_f of a significant negative 1/τ² term (s), else 0
     raw_chi2_dof: float    # χ²/dof of the full fit before any discrepancy floor
     needed: tuple          # kept below min_significance because the curve needs them
-    full_coef: np.ndarray  # squared coefficients of the unconstrained fit of every term (5, 0 if excluded)
-    full_cov: np.ndarray   # their covariance (5×5)
-    full_gain: np.ndarray  # 5×n linear map from the AVAR points to full_coef (0 rows if excluded)
+    full_coef: np.ndarray  # squared coefficients of the unconstrained fit of every term (5, 0 if excluded; +GM)
+    full_cov: np.ndarray   # their covariance (5×5, or 6×6 with GM)
+    full_gain: np.ndarray  # 5×n (6×n) linear map from the AVAR points to full_coef (0 rows if excluded)
     var_cov: np.ndarray    # n×n modelled covariance of the AVAR points (statistical part)
+    gm_tau: float = math.nan  # correlation time of the GM column of this fit (NaN: five-term model)
 
 
 #: Tail probability of the fit's χ² (scaled-χ² approximation given the
@@ -102,18 +130,16 @@ def _normal_inverse(aw: np.ndarray) -> np.ndarray:
     return np.linalg.pinv(scaled.T @ scaled) / np.outer(norm, norm)
 
 
-def _fit_once(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+def _fit_once(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
               eps: float):
-    sub = design[:, cols]
+    sub = design.mat[:, cols]
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
     signed = np.array([c == 0 for c in cols])
     h, sigma, chi2 = irls_fit(sub, var, rel, signed=signed)
     aw = sub / sigma[:, None]
     bread = _normal_inverse(aw)
-    model_terms = sub * np.abs(h)
-    dom_idx = np.argmax(model_terms, axis=1)
-    dominant = np.array([_ALPHA[TERMS[cols[k]]] for k in dom_idx])
+    dominant = _dominant(design, cols, sub * np.abs(h))
     # Whitened residual correlation: the statistical part is correlated across τ,
     # the discrepancy floor is not.
     corr = (np.outer(stat, stat) * _correlation(taus, dominant) + np.diag(np.full(taus.size, eps**2)))
@@ -125,7 +151,7 @@ def _fit_once(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     return h, cov, chi2, dof, dominant
 
 
-def _fit_free(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+def _fit_free(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
               eps: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Unconstrained weighted fit of the columns ``cols`` (coefficients of either
     sign) and the sandwich covariance with the modelled correlation across τ,
@@ -139,14 +165,13 @@ def _fit_free(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     ``ĉ = G·σ̂²`` (final weights held fixed) and the modelled covariance of the
     σ̂² points, ``diag(s)·C·diag(s)`` with ``s = σ²_model·√(2/ν)``.
     """
-    sub = design[:, cols]
+    sub = design.mat[:, cols]
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
     h, sigma, _ = irls_fit(sub, var, rel, signed=np.ones(len(cols), bool))
     aw = sub / sigma[:, None]
     bread = _normal_inverse(aw)
-    model_terms = sub * np.abs(h)
-    dominant = np.array([_ALPHA[TERMS[cols[k]]] for k in np.argmax(model_terms, axis=1)])
+    dominant = _dominant(design, cols, sub * np.abs(h))
     corr = (np.outer(stat, stat) * _correlation(taus, dominant) + np.diag(np.full(taus.size, eps**2)))
     corr /= np.outer(rel, rel)
     gain = bread @ aw.T / sigma[None, :]
@@ -155,19 +180,19 @@ def _fit_free(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndar
     return h, bread @ (aw.T @ corr @ aw) @ bread, gain, vcov
 
 
-def _chi2_expectation(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+def _chi2_expectation(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
                       eps: float) -> tuple[float, float, float]:
     """χ² of the fit and its mean and standard deviation when the residuals are
     correlated across τ as modelled (they are not χ²_dof then): with r = (I − H)e,
     e ~ N(0, C) in whitened units, E χ² = tr M and var χ² = 2 tr M², M = (I − H)C(I − H)ᵀ."""
-    sub = design[:, cols]
+    sub = design.mat[:, cols]
     stat = np.sqrt(2.0 / nu)
     rel = np.sqrt(stat**2 + eps**2)
     signed = np.array([c == 0 for c in cols])
     h, sigma, chi2 = irls_fit(sub, var, rel, signed=signed)
     aw = sub / sigma[:, None]
     hat = aw @ _normal_inverse(aw) @ aw.T
-    dominant = np.array([_ALPHA[TERMS[cols[k]]] for k in np.argmax(sub * np.abs(h), axis=1)])
+    dominant = _dominant(design, cols, sub * np.abs(h))
     corr = (np.outer(stat, stat) * _correlation(taus, dominant) + np.diag(np.full(taus.size, eps**2)))
     corr /= np.outer(rel, rel)
     proj = np.eye(taus.size) - hat
@@ -175,7 +200,8 @@ def _chi2_expectation(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus:
     return chi2, float(np.trace(m)), float(math.sqrt(2.0 * np.sum(m * m.T)))
 
 
-def _discrepancy(design, var, nu, taus, cols) -> tuple[float, float]:
+def _discrepancy(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int]
+                 ) -> tuple[float, float]:
     """Relative error floor ε per τ that brings the χ² of the full fit down to its
     expectation, when its tail probability is below ``_EPS_TRIGGER``; and χ²/dof
     without it."""
@@ -198,15 +224,19 @@ def _discrepancy(design, var, nu, taus, cols) -> tuple[float, float]:
 
 
 def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, terms: Sequence[str],
-               min_significance: float) -> _Fit:
+               min_significance: float, gm_tau: float = math.nan) -> _Fit:
     """Backward term selection: drop terms fitted at zero, then the least
     significant one while it is below ``min_significance`` or while fewer than
     one degree of freedom is left. The last term standing is kept in the curve
     but reported as resolved only if it is significant. The 1/τ² column may be
     negative (a sensor low-pass filter pulls the shortest τ below the white
-    line); a positive one is quantisation."""
-    design = _design(taus, rate)
-    cols = [TERMS.index(t) for t in terms]
+    line); a positive one is quantisation. With a finite ``gm_tau`` the variance of a
+    Gauss–Markov term of that correlation time is a sixth column, selected like the others."""
+    design = _columns(taus, rate, gm_tau)
+    if math.isfinite(gm_tau):
+        terms = tuple(terms) + ("GM",)
+    names = design.names
+    cols = [names.index(t) for t in terms]
     eps, raw = _discrepancy(design, var, nu, taus, cols)
     cols, h, cov, chi2, dof, dominant, z, needed = _select_terms(design, var, nu, taus, cols, eps,
                                                                  min_significance)
@@ -216,18 +246,19 @@ def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, t
     if significant and 0 in cols and h[cols.index(0)] < 0:
         n2 = h[cols.index(1)] if 1 in cols else 0.0
         filter_time = float(-3.0 * h[cols.index(0)] / n2) if n2 > 0 else math.inf
-    coef = np.zeros(5)
-    full = np.zeros((5, 5))
+    k = len(names)
+    coef = np.zeros(k)
+    full = np.zeros((k, k))
     coef[cols] = h
     full[np.ix_(cols, cols)] = cov
     upper = _dropped_bounds(design, var, nu, taus, terms, cols, kept_cols, eps)
     full_coef, full_cov, full_gain, var_cov = _free_fit_of_every_term(design, var, nu, taus, terms, eps)
-    return _Fit(coef, full, tuple(TERMS[c] for c in kept_cols), chi2, dof, upper, dominant, eps, filter_time,
-                raw, tuple(TERMS[c] for c in needed if c in kept_cols), full_coef, full_cov,
-                full_gain, var_cov)
+    return _Fit(coef, full, tuple(names[c] for c in kept_cols), chi2, dof, upper, dominant, eps, filter_time,
+                raw, tuple(names[c] for c in needed if c in kept_cols), full_coef, full_cov,
+                full_gain, var_cov, design.gm_tau)
 
 
-def _select_terms(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+def _select_terms(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
                   eps: float, min_significance: float) -> tuple:
     """The backward selection loop of :func:`_fit_model`.
 
@@ -271,14 +302,14 @@ def _select_terms(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.
     return cols, h, cov, chi2, dof, dominant, z, needed
 
 
-def _dropped_bounds(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray,
+def _dropped_bounds(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray,
                     terms: Sequence[str], cols: list[int], kept_cols: list[int], eps: float
                     ) -> dict[str, tuple[float, float]]:
     """For each term not kept: ``(c, σ_c)`` of a refit of the selected columns with it forced in
     (``c`` clipped at 0), from which :func:`_fit_parameters` builds its upper bound."""
     upper = {}
     for t in terms:
-        c = TERMS.index(t)
+        c = design.names.index(t)
         if c in kept_cols:
             continue
         trial = sorted(set(cols) | {c})
@@ -288,19 +319,20 @@ def _dropped_bounds(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: n
     return upper
 
 
-def _free_fit_of_every_term(design: np.ndarray, var: np.ndarray, nu: np.ndarray, taus: np.ndarray,
+def _free_fit_of_every_term(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray,
                             terms: Sequence[str], eps: float
                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """:func:`_fit_free` of all ``terms``, laid out on the five columns Q…R (zeros where excluded).
 
     Returns ``(full_coef, full_cov, full_gain, var_cov)`` as stored in :class:`_Fit`.
     """
-    all_cols = [TERMS.index(t) for t in terms]
+    all_cols = [design.names.index(t) for t in terms]
     h_all, cov_all, gain_all, var_cov = _fit_free(design, var, nu, taus, all_cols, eps)
-    full_gain = np.zeros((5, taus.size))
+    k = len(design.names)
+    full_gain = np.zeros((k, taus.size))
     full_gain[all_cols] = gain_all
-    full_coef = np.zeros(5)
-    full_cov = np.zeros((5, 5))
+    full_coef = np.zeros(k)
+    full_cov = np.zeros((k, k))
     full_coef[all_cols] = h_all
     full_cov[np.ix_(all_cols, all_cols)] = cov_all
     return full_coef, full_cov, full_gain, var_cov

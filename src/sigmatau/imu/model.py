@@ -122,10 +122,11 @@ from __future__ import annotations
 
 from .answers import angle_error
 from .extraction import DEVIATION_RANGE, analyze, from_curve
+from .gaussmarkov import gauss_markov_avar
 from .kalibr import kalibr_config
 from .noisemodel import NoiseModel, optimal_averaging
 from .presets import PRESETS, Preset
-from .results import Flag, OptimalAveraging, Parameter, Region, format_duration
+from .results import Flag, GaussMarkov, OptimalAveraging, Parameter, Region, format_duration
 from .simulation import simulate, temperature_profile
 from .terms import B_FACTOR, READ_FACTOR, ImuWarning, avar_terms
 
@@ -134,6 +135,7 @@ _PUBLIC_EXTRAS = (READ_FACTOR, DEVIATION_RANGE, format_duration)
 
 __all__ = [
     "Parameter",
+    "GaussMarkov",
     "Region",
     "Flag",
     "NoiseModel",
@@ -143,6 +145,7 @@ __all__ = [
     "ImuWarning",
     "simulate",
     "temperature_profile",
+    "gauss_markov_avar",
     "analyze",
     "from_curve",
     "avar_terms",

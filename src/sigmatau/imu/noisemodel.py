@@ -23,8 +23,8 @@ from ..core.result import StabilityResult
 from ..errors import ParameterError
 from .answers import _draw_intervals, _flat_range, _minimum_draws, _model_minimum, angle_error
 from .checks import DataChecks
-from .results import Flag, OptimalAveraging, Parameter, Region, _short, format_duration
-from .terms import _design, _level, _num
+from .results import Flag, GaussMarkov, OptimalAveraging, Parameter, Region, _short, format_duration
+from .terms import _design, _gm_column, _level, _num
 from .units import TERMS, convert, pretty
 
 __all__ = ["NoiseModel", "optimal_averaging"]
@@ -70,6 +70,12 @@ class NoiseModel:
         Data checks (raw-sample input only).
     result : StabilityResult
         The OADEV curve the model was extracted from.
+    gauss_markov : GaussMarkov or None
+        The first-order Gauss–Markov term (σ_GM, T_c) when the model includes
+        one (``analyze(..., gauss_markov=)``), else None.
+    gauss_markov_test : dict or None
+        What was decided about a GM term: criterion, ΔBIC, effective number of
+        points, best correlation time, reason (also when none was kept).
     """
 
     kind: str
@@ -95,6 +101,9 @@ class NoiseModel:
     result: StabilityResult
     _coef: np.ndarray = field(default=None, repr=False)  # type: ignore[assignment]
     _cov: np.ndarray = field(default=None, repr=False)  # type: ignore[assignment]
+    gauss_markov: Optional[GaussMarkov] = None
+    gauss_markov_test: Optional[dict] = None
+    _gm: Optional[tuple] = field(default=None, repr=False)  # (σ², T_c) of a kept GM term
 
     # -- access ----------------------------------------------------------------
     def parameters(self) -> dict[str, Parameter]:
@@ -130,10 +139,13 @@ class NoiseModel:
         return out
 
     def variance(self, taus: Union[float, Sequence[float], np.ndarray]) -> np.ndarray:
-        """Allan variance of the fitted model at ``taus`` (kept terms only)."""
+        """Allan variance of the fitted model at ``taus`` (kept terms only, a Gauss–Markov term included)."""
         t = np.asarray(taus, dtype=float)
-        return _design(np.atleast_1d(t), self.rate) @ self._coef if t.ndim else float(
-            (_design(np.atleast_1d(t), self.rate) @ self._coef)[0])
+        t1 = np.atleast_1d(t)
+        v = _design(t1, self.rate) @ self._coef
+        if self._gm is not None:
+            v = v + self._gm[0] * _gm_column(t1, self.rate, self._gm[1])
+        return v if t.ndim else float(v[0])
 
     def deviation(self, taus: Union[float, Sequence[float], np.ndarray]) -> np.ndarray:
         """Allan deviation of the fitted model at ``taus``."""
@@ -141,8 +153,11 @@ class NoiseModel:
 
     def term_deviation(self, term: str, taus: Union[float, Sequence[float], np.ndarray]) -> np.ndarray:
         """Deviation contributed by one term of the fit at ``taus`` (0 for a dropped term,
-        NaN for a negative 1/τ² filter term, which subtracts variance)."""
+        NaN for a negative 1/τ² filter term, which subtracts variance). ``term="GM"``: the
+        Gauss–Markov term (0 when the model has none)."""
         t = np.atleast_1d(np.asarray(taus, dtype=float))
+        if term == "GM":
+            return np.sqrt(self._gm[0] * _gm_column(t, self.rate, self._gm[1])) if self._gm else np.zeros(t.shape)
         j = TERMS.index(term)
         with np.errstate(invalid="ignore"):
             return np.sqrt(_design(t, self.rate)[:, j] * self._coef[j])
@@ -226,6 +241,8 @@ class NoiseModel:
             "flags": [f._asdict() for f in self.flags],
             "checks": self.checks.to_dict() if self.checks is not None else None,
             "kalibr": self.kalibr(),
+            "gauss_markov": self.gauss_markov.to_dict() if self.gauss_markov is not None else None,
+            "gauss_markov_test": self.gauss_markov_test,
         }
 
     def to_table(self) -> str:
@@ -247,6 +264,10 @@ class NoiseModel:
             rows.append([t, p.format(), _short(si), cust, ro.format() if ro is not None else "—", region])
         widths = [max(len(r[j]) for r in rows) for j in range(len(rows[0]))]
         lines = [head] + ["  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip() for r in rows]
+        if self.gauss_markov is not None:
+            gm = self.gauss_markov
+            lines.append(f"Gauss–Markov term: {gm.format()} ({gm.criterion}: ΔBIC {gm.delta_bic:.3g};"
+                         " not in the Kalibr entry, which has no such term)")
         if self.flags:
             lines.append("flags:")
             lines += [f"  - [{f.code}{' ' + f.term if f.term else ''}] {f.message}" for f in self.flags]
@@ -336,6 +357,13 @@ def _kalibr_entry(model: NoiseModel, inflate: float) -> dict[str, Any]:
                    f"{name}_random_walk": "value" if k_si.resolved else "upper bound (not resolved)"},
         "inflation": f,
         "source": n_si.method,
+        # Kalibr's model has no correlated (Gauss–Markov) term: a GM term found by the fit is
+        # stated here and left out of the values (N and K are those of the model that includes it).
+        "gauss_markov": (None if model.gauss_markov is None or not model.gauss_markov.resolved else
+                         "a Gauss–Markov term was found (σ = {:.4g} {}, T_c = {:.4g} s); Kalibr has no such"
+                         " term, so it is not in these values".format(model.gauss_markov.sigma.value,
+                                                                       model.gauss_markov.sigma.unit,
+                                                                       model.gauss_markov.tau_c.value)),
         "discrete": {
             "convention": f"discrete-time standard deviations at update_rate = {model.rate:g} Hz;"
                           " not densities: sigma_d = N·√f, sigma_bd = K/√f",

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 from .terms import _num
 from .units import CUSTOMARY, TERMS, convert, pretty, term_unit
 
-__all__ = ["Parameter", "Region", "Flag", "OptimalAveraging", "format_duration"]
+__all__ = ["Parameter", "Region", "Flag", "OptimalAveraging", "GaussMarkov", "format_duration"]
 
 
 @dataclass(frozen=True)
@@ -167,6 +167,58 @@ class Region:
         return {"term": self.term, "slope": self.slope, "tau_low": _num(self.tau_low),
                 "tau_high": _num(self.tau_high), "tau_read": self.tau_read, "points": self.points,
                 "resolved": self.resolved, "rule": self.rule}
+
+
+@dataclass(frozen=True)
+class GaussMarkov:
+    """The first-order Gauss–Markov term of a noise model (see :mod:`sigmatau.imu.gaussmarkov`).
+
+    Attributes
+    ----------
+    sigma : Parameter
+        Stationary standard deviation σ_GM (unit of the samples); its interval is
+        from the fit's covariance at the chosen correlation time.
+    tau_c : Parameter
+        Correlation time T_c (s), interval from the profile of the fit's χ².
+    delta_bic : float
+        BIC of the five-term model minus that with the GM term (> 0 favours GM).
+    n_eff : float
+        Effective number of points behind the BIC penalty.
+    criterion : str
+        ``"BIC"``.
+    margin : float
+        ΔBIC above which the term is kept with ``gauss_markov="auto"``.
+    note : str
+        How the term was chosen.
+    """
+
+    sigma: Parameter
+    tau_c: Parameter
+    delta_bic: float
+    n_eff: float
+    criterion: str
+    margin: float
+    note: str = ""
+
+    @property
+    def resolved(self) -> bool:
+        """True when the model keeps the term (σ and T_c have values)."""
+        return self.sigma.resolved
+
+    def format(self, digits: int = 4) -> str:
+        """``σ = … , T_c = …`` with intervals, or the bound of σ when not resolved."""
+        if not self.resolved:
+            return f"σ {self.sigma.format(digits)} (not resolved)"
+        return f"σ = {self.sigma.format(digits)}, T_c = {self.tau_c.format(digits)}"
+
+    def __str__(self) -> str:
+        return f"Gauss–Markov {self.format()}"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dictionary (NaN and inf become None)."""
+        return {"sigma": self.sigma.to_dict(), "tau_c": self.tau_c.to_dict(), "delta_bic": _num(self.delta_bic),
+                "n_eff": _num(self.n_eff), "criterion": self.criterion, "margin": self.margin,
+                "resolved": self.resolved, "note": self.note}
 
 
 class Flag(NamedTuple):

@@ -243,7 +243,7 @@ def _no_step(step: str, done: bool) -> None:
 def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
              reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
              theoh: str = "fast", step: Callable[[str, bool], None] = _no_step,
-             dynamic_spec: Optional[tuple[float, float]] = None) -> ChannelAnalysis:
+             dynamic_spec: Optional[tuple[float, float]] = None, gauss_markov: str = "auto") -> ChannelAnalysis:
     from ..imu import model as imu
     from ..imu.units import sensor_unit
 
@@ -265,7 +265,8 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
             note = "the IMU model needs rate/specific-force samples, not phase data"
         else:
             try:
-                model = imu.analyze(x, rate=log.rate, unit=su.name, taus=taus, confidence=confidence)
+                model = imu.analyze(x, rate=log.rate, unit=su.name, taus=taus, confidence=confidence,
+                                    gauss_markov=gauss_markov)
             except DataError as exc:
                 note = str(exc)
             except (ArithmeticError, np.linalg.LinAlgError) as exc:
@@ -420,6 +421,7 @@ def analyze_log(
     on_step: Optional[Callable[[StepEvent], None]] = None,
     prep: Optional[Preparation] = None,
     dynamic: Optional[tuple[float, float]] = None,
+    gauss_markov: str = "auto",
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -473,6 +475,9 @@ def analyze_log(
         Also compute OADEV over sliding windows of every channel and its stationarity
         check (:func:`sigmatau.dynamic`, Stable32's Dynamic Stability), in
         :attr:`ChannelAnalysis.dynamic`; a window or step that does not fit is a note.
+    gauss_markov : {"auto", "never", "always"}
+        The first-order Gauss–Markov term of the IMU model (:func:`sigmatau.imu.analyze`):
+        fitted and kept when BIC prefers it (default), never, or always.
 
     Returns
     -------
@@ -493,6 +498,8 @@ def analyze_log(
         raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
     if theoh not in ("fast", "exact"):
         raise ParameterError(f"theoh={theoh!r} must be 'fast' or 'exact'")
+    if gauss_markov not in ("auto", "never", "always"):
+        raise ParameterError(f"gauss_markov={gauss_markov!r} must be 'auto', 'never' or 'always'")
     reference = datasheet_reference(datasheet)
     log, notes = _longest_segment(log)
     prepared = prepare_log(log, prep)
@@ -503,7 +510,7 @@ def analyze_log(
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names), max((log[n].nbytes for n in names), default=0))
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
-                                   theoh, on_step, dynamic)
+                                   theoh, on_step, dynamic, gauss_markov)
     done = [_with_raw(dataclasses.replace(c, prep=prepared.records.get(c.name, ())), prepared.raw, log, taus,
                       float(confidence)) for c in done]
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
@@ -513,7 +520,7 @@ def analyze_log(
                 "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
                 "workers": workers, "theoh": theoh,
                 "prep": {k: v for k, v in dataclasses.asdict(prep).items() if v is not None} if prep else {},
-                "dynamic": None if dynamic is None else [float(v) for v in dynamic]}
+                "dynamic": None if dynamic is None else [float(v) for v in dynamic], "gauss_markov": gauss_markov}
     return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
                        notes=tuple(notes), warnings=tuple(seen),
                        seconds=time.perf_counter() - t0)
@@ -587,7 +594,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
                       reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
                       progress: Optional[Callable[[str], None]],
                       theoh: str = "fast", on_step: Optional[Callable[[StepEvent], None]] = None,
-                      dynamic: Optional[tuple[float, float]] = None,
+                      dynamic: Optional[tuple[float, float]] = None, gauss_markov: str = "auto",
                       ) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
     from ..imu.model import ImuWarning
@@ -603,7 +610,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
         # The statistics and the model of a channel share its validated samples, phase and
         # noise identification (computed once instead of once per statistic).
         with shared_record(log[name]):
-            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step, dynamic)
+            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step, dynamic, gauss_markov)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch

@@ -220,6 +220,11 @@ def _model_lines(model: Any) -> str:
         si = p.si()
         cust = "; ".join(format_parameter(c) for c in p.customary())
         out.append(f"  {t} {_TERM_NAMES[model.kind][t]:<26} {format_parameter(si):<44} {cust}")
+    gm = getattr(model, "gauss_markov", None)
+    if gm is not None:
+        out.append(f"  GM (Gauss–Markov)            σ {format_parameter(gm.sigma)}, correlation time"
+                   f" {format_parameter(gm.tau_c)} ({gm.criterion} prefers it by {gm.delta_bic:.3g}; not in the"
+                   " Kalibr entry)")
     for f in model.flags:
         out.append(f"  ! [{f.code}{' ' + f.term if f.term else ''}] {f.message}")
     return "\n".join(out)

@@ -1,7 +1,8 @@
 """The IMU model and datasheet overlays of the σ–τ figure (:func:`sigmatau.report.plots.sigma_tau_figure`).
 
 Terms are drawn from a :class:`~sigmatau.imu.NoiseModel` (fitted total,
-resolved terms, upper bounds of unresolved ones, IEEE 952 read-offs) or from
+resolved terms, a Gauss–Markov term when the model has one, upper bounds of
+unresolved ones, IEEE 952 read-offs) or from
 datasheet values, in the panel's unit.
 """
 
@@ -177,6 +178,9 @@ def _draw_model(p: _Panel, ch: ChannelCurves, legend: dict, notes: list[str]) ->
             h = None
         if h is not None:
             handles.append(h)
+    gm = getattr(model, "gauss_markov", None)
+    if gm is not None and gm.resolved and view.fitted:
+        handles.append(_draw_gauss_markov(p, view, gm))
     _draw_readoffs(p, view, legend)
     if model.filter_time and model.filter_time > 0:
         notes.append(f"{ch.name}: sensor low-pass τ_f = {model.filter_time:.3g} s (negative 1/τ² term)")
@@ -236,6 +240,28 @@ def _draw_resolved_term(p: _Panel, v: _ModelView, term: str, par: Any, notes: li
         total = v.total
         share = np.where(inside, sig / np.where(total > 0, total, np.inf), -1.0)
         p.take_y([sig[int(np.argmax(share))]])
+    return h
+
+
+#: Colour of the Gauss–Markov term (Tol's "muted" scheme, beside the five terms' colours).
+GM_COLOR = "#332288"
+
+
+def _draw_gauss_markov(p: _Panel, v: _ModelView, gm: Any) -> Any:
+    """The Gauss–Markov term's line, labelled with σ_GM and T_c (each with its relative uncertainty)."""
+    with np.errstate(invalid="ignore"):
+        sig = np.asarray(v.model.term_deviation("GM", v.tt), dtype=float) * v.f
+    s, t = gm.sigma, gm.tau_c
+    rel_s = (s.high - s.low) / (2 * s.value) if s.value > 0 else math.nan
+    label = (f"Gauss–Markov σ {s.value * v.f:.3g} {_pretty(v.unit)}"
+             + (f" ±{100 * rel_s:.2g} %" if math.isfinite(rel_s) and rel_s > 0 else "")
+             + f", T_c {t.value:.3g} s [{t.low:.3g}, {t.high:.3g}]")
+    (h,) = p.ax.plot(v.tt, np.where(sig > 0, sig, np.nan), color=GM_COLOR, linestyle=(0, (3, 1.5)),
+                     linewidth=1.3, zorder=4.5, label=label)
+    h.set_gid(f"term-GM-{v.name}")
+    inside = (v.tt >= v.t0) & (v.tt <= v.t1) & np.isfinite(sig) & (sig > 0)
+    if inside.any():
+        p.take_y([float(np.max(sig[inside]))])
     return h
 
 

@@ -144,7 +144,9 @@ def _model_section(a: Any) -> str:
     conf = models[0].model.confidence
     out.append(f"<p>Intervals are two-sided at {conf:.1%}; a value shown as “&lt; x” is an upper bound of a term the"
                " record does not resolve. Method: weighted fit of the five-term Allan-variance model to the OADEV"
-               " curve (IEEE Std 952 Annex C), with read-offs on the slope lines as a cross-check.</p>")
+               " curve (IEEE Std 952 Annex C), with read-offs on the slope lines as a cross-check; a first-order"
+               " Gauss–Markov term (σ, correlation time T<sub>c</sub>) is added when the Bayesian information"
+               " criterion favours it clearly.</p>")
     for ch in models:
         m = ch.model
         rows = []
@@ -156,6 +158,13 @@ def _model_section(a: Any) -> str:
             region = (f"{reg.tau_low:.3g}–{reg.tau_high:.3g} s" if reg is not None and reg.resolved else "–")
             rows.append(f"<tr><td class='l'>{t}</td><td>{_param(p.si())}</td><td>{cust}</td>"
                         f"<td>{_param(ro.si()) if ro is not None else '–'}</td><td>{region}</td></tr>")
+        gm = getattr(m, "gauss_markov", None)
+        if gm is not None:
+            # The Gauss–Markov term (σ, T_c): fitted only, no read-off; how it was chosen in the title.
+            why = _e(f"{gm.criterion}: ΔBIC = {gm.delta_bic:.3g} (kept when > {gm.margin:g}); {gm.note}")
+            for q, label in ((gm.sigma, "GM σ"), (gm.tau_c, "GM T<sub>c</sub>")):
+                rows.append(f"<tr title='{why}'><td class='l'>{label}</td><td>{_param(q.si())}</td><td>–</td>"
+                            "<td>–</td><td>–</td></tr>")
         flags = "".join(f'<li class="flag">[{_e(f.code)}{" " + _e(f.term) if f.term else ""}] {_e(f.message)}</li>'
                         for f in m.flags)
         out.append(f"<h3>{_e(ch.name)} ({_e(m.kind)}, samples in {_e(_pretty(m.unit))})</h3>"
