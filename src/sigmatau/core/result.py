@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from dataclasses import dataclass, fields
 from typing import Any, Optional
 
 import numpy as np
 
-__all__ = ["StabilityResult"]
+__all__ = ["StabilityResult", "json_ready"]
 
 _ARRAY_FIELDS = (
     "taus", "m", "var", "dev", "n", "bias_factor",
@@ -164,3 +165,27 @@ class StabilityResult:
 
     def __str__(self) -> str:
         return self.to_table()
+
+
+def json_ready(obj: Any) -> Any:
+    """``obj`` with numpy scalars/arrays as Python values and NaN/inf as None (strict JSON).
+
+    >>> json_ready({"a": np.float64("nan"), "b": np.arange(2), "c": (1.5, float("inf"))})
+    {'a': None, 'b': [0, 1], 'c': [1.5, None]}
+    """
+    if isinstance(obj, dict):
+        return {str(k): json_ready(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [json_ready(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return json_ready(obj.tolist())
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        v = float(obj)
+        return v if math.isfinite(v) else None
+    if obj is None or isinstance(obj, str):
+        return obj
+    return str(obj)

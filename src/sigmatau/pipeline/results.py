@@ -10,9 +10,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping, Optional
 
-import numpy as np
-
 from .._version import __version__
+from ..core.result import json_ready
 from ..errors import ParameterError
 from ..core.result import StabilityResult
 
@@ -247,21 +246,3 @@ def format_parameter(p: Any) -> str:
     return f"{p.value:.4g} [{p.low:.4g}, {p.high:.4g}] {pretty(p.unit)}"
 
 
-def json_ready(obj: Any) -> Any:
-    """``obj`` with numpy scalars/arrays as Python values and NaN/inf as None (strict JSON)."""
-    if isinstance(obj, dict):
-        return {str(k): json_ready(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [json_ready(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return json_ready(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if obj is None or isinstance(obj, str):
-        return obj
-    return str(obj)

@@ -2,43 +2,19 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from ..core.result import json_ready
 from ..errors import SigmaTauWarning
 
-__all__ = ["Estimate", "PrepResult", "PrepWarning", "json_safe"]
+__all__ = ["Estimate", "PrepResult", "PrepWarning"]
 
 
 class PrepWarning(SigmaTauWarning):
     """A preparation step did something the caller should know about (samples left out, a weak fit)."""
-
-
-def json_safe(value: Any) -> Any:
-    """``value`` with numpy scalars and arrays made plain Python, NaN and ±inf made ``None``.
-
-    >>> json_safe({"a": np.float64("nan"), "b": np.arange(2), "c": (1.5, float("inf"))})
-    {'a': None, 'b': [0, 1], 'c': [1.5, None]}
-    """
-    if isinstance(value, dict):
-        return {str(k): json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [json_safe(v) for v in value.tolist()]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, (int, np.integer)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    if value is None or isinstance(value, str):
-        return value
-    return str(value)
 
 
 @dataclass(frozen=True)
@@ -55,7 +31,7 @@ class Estimate:
 
     def to_dict(self) -> dict[str, Any]:
         """``{"value", "stderr", "unit"}``, JSON-safe."""
-        return json_safe({"value": self.value, "stderr": self.stderr, "unit": self.unit})
+        return json_ready({"value": self.value, "stderr": self.stderr, "unit": self.unit})
 
     def __repr__(self) -> str:
         unit = f" {self.unit}" if self.unit else ""
@@ -105,7 +81,7 @@ class PrepResult:
         >>> fill([1.0, float("nan"), 3.0]).to_dict()["indices"]
         [1]
         """
-        return json_safe({
+        return json_ready({
             "step": self.step,
             "data_type": self.data_type,
             "n": int(self.data.size),
