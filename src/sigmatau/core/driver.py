@@ -322,12 +322,11 @@ def compute(
     given = series
     missing = missing_mask(series)
     use_freq = dtype == "freq" and stat.compute_freq is not None
-    if missing is not None:
-        pass  # the gap path below works on the samples themselves
-    elif use_freq:
-        series = series - series.mean() if stat.trend_invariant else series
-    else:
-        series = _phase_of(stat, series, rate_f, dtype)
+    if missing is None:  # with gaps, _with_gaps prepares the samples itself
+        if use_freq:
+            series = series - series.mean() if stat.trend_invariant else series
+        else:
+            series = _phase_of(stat, series, rate_f, dtype)
     ms = select_m(
         stat.name,
         n_points=n_points,
@@ -346,7 +345,8 @@ def compute(
     n_eff = None
     if missing is not None:
         var, n, n_eff = _with_gaps(stat, series, missing, rate_f, dtype, ms)
-        ms, var, n, n_eff = drop_empty_factors(stat.name, ms, var, n, n_eff, explicit=m is not None or not isinstance(taus, str))
+        explicit = m is not None or not isinstance(taus, str)
+        ms, var, n, n_eff = drop_empty_factors(stat.name, ms, var, n, n_eff, explicit=explicit)
     elif ms.size:
         var, n = kernel(series, ms, tau0)
     else:
@@ -417,7 +417,8 @@ def gap_free_runs(stat: Statistic, series: np.ndarray, missing: np.ndarray, rate
 
 
 def drop_empty_factors(name: str, ms: np.ndarray, var: np.ndarray, n: np.ndarray, n_eff: np.ndarray, *,
-                       explicit: bool, allow_empty: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                       explicit: bool, allow_empty: bool = False
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Drop the factors at which every term reads a gap; say so when the user asked for them.
 
     Raises DataError when none is left (unless ``allow_empty``: one part of a hybrid statistic).
