@@ -110,7 +110,9 @@ def bags(tmp_path_factory):
         ros1 = kind == "ros1"
         ts = _store(ros1)
         imu = [(int(received[i]), _imu(ts, ros1, i, int(stamps[i]), gyro[i], accel[i])) for i in range(N)]
-        temp = [(int(stamps[i]), _temperature(ts, ros1, int(stamps[i]), 20.0 + i)) for i in range(5)]
+        # a temperature message every 50 IMU samples over the whole record: 20 °C rising 1 °C per message
+        temp = [(int(stamps[i]), _temperature(ts, ros1, int(stamps[i]), 20.0 + i / 50)) for i in range(0, N, 50)]
+        temp.append((int(stamps[-1]), _temperature(ts, ros1, int(stamps[-1]), 20.0 + (N - 1) / 50)))
         out[kind] = write_bag(folder / _suffix(kind), kind, {"/imu": imu, "/temperature": temp},
                               {"/imu": IMU, "/temperature": TEMPERATURE})
     return out
@@ -126,7 +128,7 @@ def _digest(path: Path) -> str:
 
 @pytest.mark.parametrize("kind", KINDS)
 def test_list_topics(bags, kind):
-    assert io.list_topics(bags[kind]) == [TopicInfo("/imu", IMU, N), TopicInfo("/temperature", TEMPERATURE, 5)]
+    assert io.list_topics(bags[kind]) == [TopicInfo("/imu", IMU, N), TopicInfo("/temperature", TEMPERATURE, N // 50 + 1)]
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -139,10 +141,14 @@ def test_read_back_exactly(bags, kind):
     assert _digest(bags[kind]) == before  # the bag is only read
     assert log.source.format == ("rosbag1" if kind == "ros1" else "rosbag2")
     assert log.source.topic == "/imu" and f"storage {'rosbag1' if kind == 'ros1' else kind}" in log.source.detail
-    assert log.names == ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
+    assert log.names == ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z", "temperature")
     np.testing.assert_array_equal(log.as_array()[:, :3], gyro)
-    np.testing.assert_array_equal(log.as_array()[:, 3:], accel)
-    assert log.units == {**{f"gyro_{a}": "rad/s" for a in "xyz"}, **{f"accel_{a}": "m/s^2" for a in "xyz"}}
+    np.testing.assert_array_equal(log.as_array()[:, 3:6], accel)
+    # the sensor_msgs/Temperature topic beside the IMU topic, interpolated at the IMU stamps
+    np.testing.assert_allclose(log["temperature"], 20.0 + np.arange(N) / 50, rtol=0, atol=1e-9)
+    assert "temperature from /temperature" in log.source.detail
+    assert log.units == {**{f"gyro_{a}": "rad/s" for a in "xyz"}, **{f"accel_{a}": "m/s^2" for a in "xyz"},
+                         "temperature": "degC"}
     assert set(log.unit_origin.values()) == {"format"}
     np.testing.assert_array_equal(log.timestamps, (stamps - stamps[0]) / 1e9)
     assert log.time_origin == pytest.approx(T0 / 1e9, abs=1e-6)
@@ -175,7 +181,7 @@ def test_bag_receive_time(bags, kind):
 def test_topic_errors(bags, kind):
     with pytest.raises(ParameterError) as e:
         io.read(bags[kind], topic="/imu0")
-    _check(e, ParameterError, "no topic '/imu0'", rf"/imu \({IMU}, {N}\)", rf"/temperature \({TEMPERATURE}, 5\)")
+    _check(e, ParameterError, "no topic '/imu0'", rf"/imu \({IMU}, {N}\)", rf"/temperature \({TEMPERATURE}, {N // 50 + 1}\)")
     with pytest.raises(ParameterError) as e:
         io.read(bags[kind], topic="/temperature")
     _check(e, ParameterError, f"carries {TEMPERATURE}, not {IMU}", "topics are")
@@ -298,3 +304,20 @@ def test_corrupt_and_truncated_bags(bags, tmp_path):
     with pytest.raises(FormatError) as e:
         io.read(broken)
     _check(e, FormatError, "broken_dir", "cannot read as a ROS 2 bag")
+
+
+@pytest.mark.parametrize("kind", ["ros1", "mcap"])
+def test_temperature_topic_used_only_when_it_spans_the_record(tmp_path, kind):
+    ros1 = kind == "ros1"
+    ts = _store(ros1)
+    gyro, accel, stamps, received = _data()
+    imu = [(int(received[i]), _imu(ts, ros1, i, int(stamps[i]), gyro[i], accel[i])) for i in range(N)]
+    short = [(int(stamps[i]), _temperature(ts, ros1, int(stamps[i]), 25.0)) for i in range(0, N // 4, 10)]
+    p = write_bag(tmp_path / _suffix(kind), kind, {"/imu": imu, "/t": short}, {"/imu": IMU, "/t": TEMPERATURE})
+    with pytest.warns(io.InputWarning, match=r"temperature topic /t spans 2[0-9.]* % of the IMU samples .*not used"):
+        log = io.read(p)
+    assert "temperature" not in log.names
+    # choosing columns leaves the temperature topic alone
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert io.read(p, columns=["gyro_x"]).names == ("gyro_x",)

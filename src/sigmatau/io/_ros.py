@@ -28,6 +28,9 @@ from ._registry import Options, Table, file_sha256, register
 __all__ = ["read_bag", "topics", "IMU_TYPE", "CHANNELS"]
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
+TEMPERATURE_TYPE = "sensor_msgs/msg/Temperature"
+#: Share of the IMU samples a temperature topic must span to become the log's temperature channel.
+TEMPERATURE_COVERAGE = 0.9
 CHANNELS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 _BATCH = 8192
 # Offsets (in float64 words) in the 37 doubles after the header: orientation (4),
@@ -224,6 +227,7 @@ def read_bag(path: Path, display: str, opts: Options, progress: Progress) -> Tab
             raise
         except Exception as exc:  # damaged chunk, bad serialisation …
             raise bag.error(exc) from None
+        temperature = _temperature_messages(bag, opts) if opts.columns is None else None
     finally:
         bag.close()
     stamps, received, values = stamps[:n], received[:n], values[:, :n]
@@ -238,13 +242,58 @@ def read_bag(path: Path, display: str, opts: Options, progress: Progress) -> Tab
     names = list(CHANNELS)
     sel = select(names, [True] * 6, columns=opts.columns, time_column=False, path=display, what="channel")
     data = {names[j]: values[j] for j in sel.channels}
+    units = {k: ("rad/s" if k.startswith("gyro") else "m/s^2") for k in data}
+    detail_temp = ""
+    if temperature is not None:
+        name_t, t_ns, t_val = temperature
+        column = _on_imu_times(times, t_ns, t_val)
+        covered = float(np.mean(~np.isnan(column))) if column.size else 0.0
+        if covered >= TEMPERATURE_COVERAGE:
+            data["temperature"] = column
+            units["temperature"] = "degC"
+            names.append("temperature")
+            detail_temp = f"; temperature from {name_t} ({TEMPERATURE_TYPE}, {t_ns.size} messages, interpolated)"
+        else:
+            warnings.append(f"{display}: temperature topic {name_t} spans {100 * covered:.3g} % of the IMU"
+                            f" samples (at least {100 * TEMPERATURE_COVERAGE:g} % is needed); not used")
     digest, size = file_sha256(path)
     storage = _storage(path)
     return Table(
         format="rosbag1" if ros1 else "rosbag2",
         columns=tuple(names), data=data, rows=n, sha256=digest, size=size,
         time=times, time_name=source, time_unit="ns", time_unit_reason=f"{source} in ns",
-        units={k: ("rad/s" if k.startswith("gyro") else "m/s^2") for k in data}, unit_origin="format",
-        detail=f"topic {topic} ({IMU_TYPE}, {n} messages), storage {storage}; time from {source}",
+        units=units, unit_origin="format",
+        detail=f"topic {topic} ({IMU_TYPE}, {n} messages), storage {storage}; time from {source}{detail_temp}",
         topic=topic, warnings=warnings,
     )
+
+
+def _temperature_messages(bag: _Bag, opts: Options) -> tuple[str, np.ndarray, np.ndarray] | None:
+    """The one ``sensor_msgs/msg/Temperature`` topic of the bag as (name, times in ns, °C), sorted by
+    time (header stamps, or the receive times when asked or when every stamp is zero); None when the
+    bag has none or several (which one is the IMU's cannot be told)."""
+    found = [(n, i) for n, i in bag.reader.topics.items() if i.msgtype == TEMPERATURE_TYPE]
+    if len(found) != 1:
+        return None
+    name, info = found[0]
+    stamps, received, values = [], [], []
+    for conn, t, raw in bag.reader.messages(connections=info.connections):
+        msg = bag.reader.deserialize(bytes(raw), conn.msgtype)
+        stamps.append(int(msg.header.stamp.sec) * 1_000_000_000 + int(msg.header.stamp.nanosec))
+        received.append(int(t))
+        values.append(float(msg.temperature))
+    if len(values) < 2:
+        return None
+    times = np.array(received if opts.stamps == "bag" or not any(stamps) else stamps, dtype=np.int64)
+    order = np.argsort(times, kind="stable")
+    return name, times[order], np.array(values)[order]
+
+
+def _on_imu_times(imu_ns: np.ndarray, t_ns: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The temperature linearly interpolated at the IMU times; NaN outside the topic's time span."""
+    if imu_ns.size == 0:
+        return np.empty(0)
+    origin = int(imu_ns[0])
+    x = (imu_ns - origin).astype(np.float64)
+    xp = (t_ns - origin).astype(np.float64)
+    return np.interp(x, xp, values, left=np.nan, right=np.nan)
