@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from sigmatau import io
-from sigmatau.analysis import TERMS, analyze_log
+from sigmatau.analysis import Preparation, TERMS, analyze_log
 from sigmatau.batch import analyze_many, expand_patterns, load_limits
 from sigmatau.cli import main
 from sigmatau.errors import ParameterError
@@ -116,7 +116,9 @@ def test_numbers_equal_single_machine_analysis(fleet):
     assert len(rows) == N_LOGS * 6 * len(TERMS)
     by_key = {(r["path"], r["channel"], r["term"]): r for r in rows}
     for rec in fleet.records:
-        here = analyze_log(io.read(rec["path"]), statistics=STATS, workers=1)
+        # what `sigmatau analyze` runs by default: the warm-up searched, temperature compensated
+        here = analyze_log(io.read(rec["path"]), statistics=STATS, workers=1,
+                           prep=Preparation(warmup="auto", temperature="auto"))
         assert rec["sha256"] == here.log.source.sha256
         assert rec["samples"] == len(here.log) and rec["rate"] == here.log.rate
         for ch, mine in zip(here.channels, rec["channels"]):

@@ -67,6 +67,10 @@ def add_cli(subparsers: Any) -> None:
     g.add_argument("--accel-unit", help="m/s^2, mm/s^2, g, mg, ug")
     g.add_argument("--unit", action="append", default=[], metavar="CHANNEL=UNIT", help="unit of one channel")
     a = p.add_argument_group("analysis (as sigmatau analyze)")
+    a.add_argument("--warmup", default="auto", metavar="auto|keep|SECONDS",
+                   help="the settling after power-on: auto (default: detected and left out), keep, or seconds")
+    a.add_argument("--temperature", choices=["auto", "off"], default="auto",
+                   help="auto (default): compensate gyro and accel against a temperature column; off")
     a.add_argument("--stat", default="oadev,mdev,tdev,ohdev,totdev,theoh",
                    help="statistics, comma-separated (default oadev,mdev,tdev,ohdev,totdev,theoh)")
     a.add_argument("--taus", default="octave", help="τ grid: octave (default), decade, all, log")
@@ -120,7 +124,18 @@ def _cmd_batch(args: Any, console: Any) -> int:
         statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
         axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic, datasheet=_datasheet(args.datasheet),
         figures=figures, report=not args.no_report, limits=args.limits, limit_margin=args.limit_margin,
-        outlier_z=args.outlier_z, force=args.force_rerun, progress=progress)
+        outlier_z=args.outlier_z, force=args.force_rerun, progress=progress, warmup=_warmup_option(args.warmup),
+        temperature=args.temperature)
     print(fleet.summary())
     print(f"wrote {args.out}/fleet.html, fleet.csv, fleet_logs.csv, fleet.json; per log: {args.out}/{LOGS_DIR}/")
     return EXIT_OK if fleet.ok else EXIT_DATA
+
+
+def _warmup_option(text: str) -> Any:
+    """``--warmup`` as :class:`sigmatau.analysis.Preparation` takes it: auto, keep or seconds."""
+    if text in ("auto", "keep"):
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise _UsageError(f"--warmup {text!r} must be auto, keep or a number of seconds") from None

@@ -31,6 +31,8 @@ __all__ = ["Preparation", "Prepared", "prepare_log", "parse_part"]
 
 #: Groups whose channels carry the sensor noise that the warm-up and temperature steps model.
 _SENSOR_GROUPS = ("gyro", "accel")
+#: False-alarm probability of the warm-up search over all the gyro and accel channels of a log.
+WARMUP_ALPHA = 0.01
 #: Customary units of a temperature coefficient, per group (per kelvin, i.e. per °C).
 _TEMPCO_UNITS = {"gyro": "deg/h", "accel": "mg"}
 
@@ -232,9 +234,12 @@ def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict
         notes.append("warm-up: not looked for (no gyro or accel channel)")
         return 0
     ends = {}
+    # the latest end over the channels: each tested at 1 %/channels, so that a stationary log is
+    # cut by a false alarm at most 1 % of the time (not 1 % per channel)
+    alpha = WARMUP_ALPHA / len(sensors)
     for name in sensors:
         try:
-            r = _noted(lambda: warmup(looked_at[name], rate=log.rate), f"warm-up of {name}", notes)
+            r = _noted(lambda: warmup(looked_at[name], rate=log.rate, alpha=alpha), f"warm-up of {name}", notes)
         except DataError as exc:
             notes.append(f"warm-up of {name} not estimated: {exc}")
             continue
@@ -268,7 +273,7 @@ def _without_temperature_dependence(log: Any, channels: dict) -> dict:
         for name in sensors:
             x = channels[name]
             try:
-                first = warmup(x, rate=log.rate)
+                first = warmup(x, rate=log.rate, alpha=WARMUP_ALPHA / len(sensors))
                 cut = int(first.details.get("end_index") or 0) if first.details.get("detected") else 0
                 fit = temperature_fit(x[cut:], temp[cut:], rate=log.rate)
             except DataError:

@@ -80,12 +80,15 @@ def _read_kwargs(read: Optional[Mapping[str, Any]]) -> dict[str, Any]:
 
 
 def _analysis_kwargs(statistics: Any, taus: Any, confidence: float, model: bool, axis_rule: str, inflate: float,
-                     rostopic: str, datasheet: Any) -> dict[str, Any]:
+                     rostopic: str, datasheet: Any, warmup: Any = "auto", temperature: Any = "auto") -> dict[str, Any]:
     """The keyword arguments of :func:`sigmatau.analysis.analyze_log`, checked and JSON-ready.
 
     They enter the settings token, so they are normalised here (floats, lists).
     """
     from ...pipeline.analysis import check_statistics, datasheet_reference
+    from ...pipeline.prepare import Preparation
+
+    Preparation(warmup=warmup, temperature=temperature)  # checks them
 
     if axis_rule not in ("max", "rms", "mean"):
         raise ParameterError(f"axis_rule={axis_rule!r} must be 'max', 'rms' or 'mean'")
@@ -98,7 +101,9 @@ def _analysis_kwargs(statistics: Any, taus: Any, confidence: float, model: bool,
     return {"statistics": list(check_statistics(statistics)), "taus": taus, "confidence": float(confidence),
             "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": str(rostopic),
             "datasheet": {g: {t: list(v) for t, v in terms.items()}
-                          for g, terms in datasheet_reference(datasheet).items()} or None}
+                          for g, terms in datasheet_reference(datasheet).items()} or None,
+            "warmup": warmup if isinstance(warmup, str) or warmup is None else float(warmup),
+            "temperature": temperature}
 
 
 def _check_settings(out: Path, settings: dict[str, Any], force: bool) -> str:

@@ -54,6 +54,8 @@ def analyze_many(
     fleet_figures: bool = True,
     force: bool = False,
     progress: Any = None,
+    warmup: Any = "auto",
+    temperature: Any = "auto",
 ) -> FleetSummary:
     """Analyse many logs on a Dask cluster, one task per log, and summarise the fleet.
 
@@ -83,6 +85,10 @@ def analyze_many(
         for every log.
     statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet
         As :func:`sigmatau.analysis.analyze_log`.
+    warmup, temperature
+        As ``sigmatau analyze --warmup/--temperature`` (:class:`sigmatau.analysis.Preparation`):
+        by default the warm-up is detected and left out, and the gyro and accel channels are
+        compensated for temperature when a log has a temperature channel.
     figures : sequence of {"png", "svg", "pdf"} or None
         Per-log figure formats (default PNG only; None: no figures, fastest).
     report : bool
@@ -143,7 +149,8 @@ def analyze_many(
     fmts = _figure_formats(figures)
     _check_outlier_z(outlier_z)
     read_kw = _read_kwargs(read)
-    analysis_kw = _analysis_kwargs(statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet)
+    analysis_kw = _analysis_kwargs(statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet,
+                                   warmup, temperature)
     lim = load_limits(limits, margin=limit_margin)
     _check_out(out_p)
     if scheduler is not None:

@@ -134,6 +134,7 @@ def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_
     """
     from ... import io
     from ...pipeline.analysis import analyze_log
+    from ...pipeline.prepare import Preparation
     from ...report.outputs import write_outputs
 
     t0 = time.perf_counter()
@@ -154,7 +155,9 @@ def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             log = io.read(path, progress=False, **read_kw)
-            analysis = analyze_log(log, workers=1, **analysis_kw)
+            kw = dict(analysis_kw)
+            prep = Preparation(warmup=kw.pop("warmup", None), temperature=kw.pop("temperature", None))
+            analysis = analyze_log(log, workers=1, prep=prep or None, **kw)
         warns = [f"{w.category.__name__}: {w.message}" for w in caught
                  if not w.category.__name__.startswith("Imu")]
         staging = folder / f".{name}.staging-{uuid.uuid4().hex[:8]}"
