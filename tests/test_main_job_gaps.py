@@ -272,3 +272,22 @@ def test_gauss_markov_term_in_the_main_job(tmp_path, capsys):
     assert never.channels[0].model.gauss_markov is None and "GM (Gauss–Markov)" not in never.summary()
     with pytest.raises(Exception, match="gauss_markov='sometimes' must be"):
         analyze_log(log, statistics="oadev", gauss_markov="sometimes")
+
+
+def test_a_transient_found_but_not_cut_is_a_note_not_a_warning():
+    # A slow drift looks like a warm-up as slow as the record allows: nothing is cut, and the
+    # analysis says so for that channel (the search runs in threads; no warning escapes).
+    from sigmatau.analysis import log_from_arrays
+    from sigmatau.pipeline.prepare import prepare_log
+
+    rng = np.random.default_rng(1)
+    t = np.arange(60_000) / RATE
+    y = 1e-3 * rng.standard_normal(t.size) + 2e-4 * (1 - np.exp(-t / 2000.0))
+    log = log_from_arrays({"gyro_x": y, "gyro_y": 1e-3 * rng.standard_normal(t.size)}, rate=RATE,
+                          units={"gyro_x": "rad/s", "gyro_y": "rad/s"})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p = prepare_log(log, Preparation(warmup="auto"))
+    assert len(p.log) == t.size
+    assert p.notes[0].startswith("warm-up of gyro_x: the fitted transient") and "nothing is cut" in p.notes[0]
+    assert p.notes[1].startswith("warm-up: nothing to leave out on gyro_x, gyro_y")

@@ -19,6 +19,7 @@ compensated one.
 from __future__ import annotations
 
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Callable, Optional, Union
 
@@ -213,6 +214,27 @@ def _noted(step: Callable[[], Any], what: str, notes: list) -> Any:
     return out
 
 
+def _in_threads(step: Callable[[str], Any], names: list[str]) -> dict[str, Any]:
+    """``step(name)`` for every name, two at a time (numpy releases the GIL in the passes over the
+    record); a DataError is returned in place of the result. What a step warns about is also in its
+    record's notes, from which the caller makes the analysis's notes (which say the channel)."""
+    def guarded(name: str) -> Any:
+        try:
+            return step(name)
+        except DataError as exc:
+            return exc
+
+    # the warning filters are process-wide: one recorder around the pool, as for the channels
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with ThreadPoolExecutor(max_workers=min(2, max(1, len(names))), thread_name_prefix="sigmatau-prep") as pool:
+            out = dict(zip(names, pool.map(guarded, names)))
+    for w in caught:
+        if not issubclass(w.category, SigmaTauWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return out
+
+
 def _sensor_channels(log: Any, channels: dict) -> list[str]:
     return [n for n in channels if log.group_of(n) in _SENSOR_GROUPS]
 
@@ -236,18 +258,20 @@ def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict
     ends = {}
     # the latest end over the channels: each tested at 1 %/channels, so that a stationary log is
     # cut by a false alarm at most 1 % of the time (not 1 % per channel)
-    alpha = WARMUP_ALPHA / len(sensors)
+    found = _in_threads(lambda name: warmup(looked_at[name], rate=log.rate, alpha=WARMUP_ALPHA / len(sensors)),
+                        sensors)
     for name in sensors:
-        try:
-            r = _noted(lambda: warmup(looked_at[name], rate=log.rate, alpha=alpha), f"warm-up of {name}", notes)
-        except DataError as exc:
-            notes.append(f"warm-up of {name} not estimated: {exc}")
+        r = found[name]
+        if isinstance(r, DataError):
+            notes.append(f"warm-up of {name} not estimated: {r}")
             continue
         records[name].append(r.to_dict())
         if r.details.get("detected") and r.details.get("settled") and r.details.get("end_index"):
             ends[name] = int(r.details["end_index"])
+        elif r.details.get("detected"):  # a transient found but not cut: say why (its first note)
+            notes.append(f"warm-up of {name}: {r.notes[0]}")
     if not ends:
-        notes.append(f"warm-up: none detected on {', '.join(sensors)}; the whole record is analysed"
+        notes.append(f"warm-up: nothing to leave out on {', '.join(sensors)}; the whole record is analysed"
                      " (--warmup keep to skip the check)")
         return 0
     last = max(ends, key=lambda k: ends[k])
