@@ -291,3 +291,32 @@ def test_a_transient_found_but_not_cut_is_a_note_not_a_warning():
     assert len(p.log) == t.size
     assert p.notes[0].startswith("warm-up of gyro_x: the fitted transient") and "nothing is cut" in p.notes[0]
     assert p.notes[1].startswith("warm-up: nothing to leave out on gyro_x, gyro_y")
+
+
+def test_gaps_warm_up_and_ramp_through_analyze_with_no_flags(tmp_path, capsys):
+    # The "done when": one log with dropped samples (scattered and a burst), a warm-up and
+    # a temperature ramp, through `sigmatau analyze` with no flags, against the same log clean.
+    common = ["--duration", "1800", "--rate", "100", "--seed", "11", "--quiet"]
+    from sigmatau.cli import main
+
+    assert main(["simulate", str(tmp_path / "clean.csv"), *common]) == 0
+    assert main(["simulate", str(tmp_path / "field.csv"), *common, "--drop", "0.001", "--gap", "700:3",
+                 "--temperature", "ramp:15:45", "--gyro-tempco", "2e-5", "--accel-tempco", "1e-4",
+                 "--gyro-warmup", "3e-4:60", "--accel-warmup", "3e-3:40"]) == 0
+    results = {}
+    for name in ("clean", "field"):
+        code, said, err = run_cli(["analyze", str(tmp_path / f"{name}.csv"), "--out", str(tmp_path / name),
+                                   "--no-figures"], capsys)
+        assert code == 0, err
+        results[name] = json.loads((tmp_path / name / "results.json").read_text()), said
+    (clean, _), (field, said) = results["clean"], results["field"]
+    assert "held the sample before" in said and "marked 300 missing sample(s) in 1 gap(s)" in said
+    assert "warm-up: detected on" in said and "temperature: the bias of gyro_x" in said
+    report = (tmp_path / "field" / "report.html").read_text()
+    assert "<h3>Preparation</h3>" in report and "tempco" in report and "warmup" in report
+    for c, f in zip(clean["channels"], field["channels"]):
+        assert [s["step"] for s in f["prep"]] == ["warmup", "temperature"]
+        n_c, n_f = c["model"]["parameters"]["N"], f["model"]["parameters"]["N"]
+        assert n_f["low"] <= n_c["high"] and n_c["low"] <= n_f["high"], (c["name"], n_c, n_f)
+    for key in ("gyroscope_noise_density", "accelerometer_noise_density"):
+        assert abs(field["kalibr"][key] / clean["kalibr"][key] - 1) < 0.01, key
