@@ -131,8 +131,8 @@ class Prepared:
     records : dict of str to tuple of dict
         Each channel's step records, in order (:meth:`sigmatau.prep.PrepResult.to_dict`).
     raw : dict of str to numpy.ndarray
-        The channels compensated for temperature, as they were before the compensation (and
-        after the later steps that apply to both, so that their σ–τ curves compare).
+        The channels compensated for temperature, as they were before the compensation
+        (averaged as the channel is, so that the two σ–τ curves compare).
     notes : list of str
         What was done to the log as a whole (the warm-up cut, a temperature fit that failed).
     """
