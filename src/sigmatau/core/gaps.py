@@ -4,10 +4,11 @@ A missing sample is NaN, Stable32's convention for gaps. Every statistic uses
 each term whose samples are all present and only those:
 
 * **phase data**: a term reads the phase points of its definition; it is used
-  when every one of them is present. For the Allan and Hadamard variances that
-  is the 2 to 4 points ``x_i, x_{i+m}, …`` (as allantools' gap-resistant
-  ``gradev``); the modified, total and Theo families read every point of their
-  window ``x_i … x_{i+L-1}``.
+  when every one of them is present. For the Allan and Hadamard variances, TIE
+  rms, STDEV/OSTDEV and TOTDEV (on the record extended by reflection at its two
+  ends) that is the 2 to 4 points ``x_i, x_{i+m}, …`` (as allantools'
+  gap-resistant ``gradev``); the modified, MTOT/TTOT/HTOT and Theo families read
+  every point of their window ``x_i … x_{i+L-1}``.
 * **frequency data**: a missing frequency sample leaves the phase after it
   unknown by a constant, so a term is used only when the whole window of
   frequency samples it spans is present.
@@ -23,9 +24,10 @@ Two ways of computing this are provided here for the statistics' kernels:
   ``var = Σ_s var_s·n_s / Σ_s n_s`` (every estimator here is a mean of its terms
   times a factor that depends on m and τ0 only), or the largest value for MTIE.
   A window inside a run is exactly a window free of gaps, so this is the plain
-  definition restricted to gap-free terms. The total variances extend each run
-  at its own ends (their extension exists to use every window of a record; a gap
-  ends the record it extends).
+  definition restricted to gap-free terms (MTOT, TTOT and HTOT included: each of
+  their terms extends its own window). TOTDEV on frequency data, pooled this way,
+  extends each run at its own ends: its extension exists to use every window of a
+  record, and a gap ends the record it extends.
 * statistic-specific kernels that let NaN propagate through the points a term
   reads (:func:`nan_terms_variance`), for the point-wise phase statistics and the
   non-overlapped estimators, whose blocks stay on the record's own grid.
