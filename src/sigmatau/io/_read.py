@@ -209,7 +209,9 @@ def read(
         Steps longer than ``gap_threshold`` median steps. "mark": place the samples
         on the nominal grid, each missing one a NaN, which every statistic treats as
         a gap (Stable32's Regularize); "auto" (default): mark when at most 10 % of the
-        samples are missing, else refuse; "refuse": an error naming where; "split":
+        samples are missing, a gap of at most 5 samples holding the sample before it,
+        else refuse (NaN cells of a data column follow the same share rule);
+        "refuse": an error naming where; "split":
         keep the samples and let :meth:`SensorLog.segments` split; "ignore": analyse
         as if the samples were contiguous.
     gap_threshold : float
