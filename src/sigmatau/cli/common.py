@@ -172,7 +172,10 @@ def _add_input_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--debug", action="store_true", help="show the traceback of an error")
 
 
-def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh: str = "fast") -> None:
+def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh: str = "fast",
+                          as_recorded: bool = False) -> None:
+    """The analysis and preparation options; ``as_recorded`` (``stats``: Stable32-like tables of the
+    record as given) makes ``--warmup keep --temperature off`` the defaults."""
     g = p.add_argument_group("analysis")
     g.add_argument("--stat", default=default_stats,
                    help=f"statistics, comma-separated (default {default_stats}); any of stdev, ostdev, adev, oadev,"
@@ -193,12 +196,14 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
     pr.add_argument("--drift", metavar="MODEL",
                     help="remove the drift: linear, bisection, log or diffusion (frequency/rate data);"
                          " quadratic, diff2, 3point or greenhall (phase data)")
-    pr.add_argument("--warmup", default="auto", metavar="auto|keep|SECONDS",
-                    help="the settling of the bias after power-on: auto (default: detected on the gyro and accel"
-                         " channels and left out, saying so), keep, or a number of seconds to leave out")
-    pr.add_argument("--temperature", choices=["auto", "off"], default="auto",
-                    help="auto (default): with a temperature column, fit each gyro and accel channel's bias"
-                         " against it and analyse the compensated residual (the raw curve beside it); off")
+    warm, temp = ("keep", "off") if as_recorded else ("auto", "auto")
+    pr.add_argument("--warmup", default=warm, metavar="auto|keep|SECONDS",
+                    help="the settling of the bias after power-on: auto (detected on the gyro and accel"
+                         " channels and left out, saying so), keep, or a number of seconds to leave out"
+                         f" (default {warm})")
+    pr.add_argument("--temperature", choices=["auto", "off"], default=temp,
+                    help="auto: with a temperature column, fit each gyro and accel channel's bias against it"
+                         f" and analyse the compensated residual (the raw curve beside it); off (default {temp})")
     pr.add_argument("--average", type=int, metavar="M", help="average M consecutive samples (rate becomes rate/M)")
     g.add_argument("--gauss-markov", choices=["auto", "never", "always"], default="auto",
                    help="the IMU model's first-order Gauss–Markov term (σ, correlation time): auto (default: kept"

@@ -124,7 +124,8 @@ def add_cli(sub: Any) -> None:
               sigmatau stats gyro.bin --chunked --dtype '<f4' --offset 512 --rate 200
             """) + _EPILOG_ERRORS)
     _add_input_options(stats)
-    _add_analysis_options(stats, "oadev", theoh="exact")  # Stable32-like tables: the definition
+    # Stable32-like tables: the definition, of the record as given unless a preparation is asked for
+    _add_analysis_options(stats, "oadev", theoh="exact", as_recorded=True)
     stats.add_argument("--csv", help="write every table to this CSV file ('-' for stdout) instead of printing")
     stats.add_argument("--force", action="store_true", help="replace an existing CSV file")
     big = stats.add_argument_group("records larger than memory (sigmatau.chunked)")

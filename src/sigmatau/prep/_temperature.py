@@ -162,6 +162,11 @@ def temperature_fit(data: object, temperature: object, *, rate: float, unit: str
     half = 0.5 * float(np.max(tv) - np.min(tv))
     u = (temp - t_ref) / half
     ybar, powers, w, m = _block_means(v, u, ok, order_max)
+    # the fits run on the block means scaled by an exact power of two into [0.5, 1), so that no
+    # square overflows or underflows at 1e±200; _result scales the coefficients back
+    peak = float(np.max(np.abs(ybar))) if ybar.size else 0.0
+    shift = math.frexp(peak)[1] if peak > 0 and math.isfinite(peak) else 0
+    ybar = np.ldexp(ybar, -shift)
     k = ybar.size
     if k < _MIN_BLOCKS:
         raise DataError(f"temperature_fit: too few blocks with data and temperature ({k}; at least"
@@ -172,32 +177,34 @@ def temperature_fit(data: object, temperature: object, *, rate: float, unit: str
     with np.errstate(divide="ignore"):
         bic = [k * math.log(max(rss, 1e-300) / k) + (p + 1) * math.log(k) for p, (_, _, rss) in enumerate(fits)]
     order = int(np.argmin(bic))
-    return _result(v, temp, ok, fits, order, bic, t_ref, half, unit, rate_f, order_max, made_gaps, k, m)
+    return _result(v, temp, ok, fits, order, bic, t_ref, half, unit, rate_f, order_max, made_gaps, k, m, shift)
 
 
 def _result(v: np.ndarray, temp: np.ndarray, ok: np.ndarray, fits: list, order: int, bic: list[float],
             t_ref: float, half: float, unit: str | None, rate: float, order_max: int, made_gaps: np.ndarray,
-            k: int, m: int) -> PrepResult:
+            k: int, m: int, shift: int = 0) -> PrepResult:
     """Coefficients in powers of ``T − T̄``, the tempco, the compensated series and the record."""
     du = unit or "data"
 
     def coefficients(p: int) -> tuple[np.ndarray, np.ndarray]:
+        """The coefficients in the data's unit and their standard errors (from the scaled fit)."""
         beta, cov_u, rss = fits[p]
         s2 = rss / max(k - p - 1, 1)
         scale = half ** -np.arange(p + 1)  # c_k = β_k / h^k
-        return beta * scale, s2 * cov_u * np.outer(scale, scale)
+        se = np.sqrt(np.maximum(np.diag(s2 * cov_u), 0.0)) * np.abs(scale)
+        return np.ldexp(beta * scale, shift), np.ldexp(se, shift)
 
-    c, cov = coefficients(order)
+    c, se = coefficients(order)
     estimates: dict[str, Estimate] = {}
     significant = order >= 1
     if significant:
-        estimates["tempco"] = Estimate(float(c[1]), float(math.sqrt(cov[1, 1])), f"{du}/K")
+        estimates["tempco"] = Estimate(float(c[1]), float(se[1]), f"{du}/K")
     elif len(fits) > 1:
-        c1, cov1 = coefficients(1)
-        estimates["tempco"] = Estimate(float(c1[1]), float(math.sqrt(cov1[1, 1])), f"{du}/K")
-    estimates["bias_at_reference"] = Estimate(float(c[0]), float(math.sqrt(cov[0, 0])), du)
+        c1, se1 = coefficients(1)
+        estimates["tempco"] = Estimate(float(c1[1]), float(se1[1]), f"{du}/K")
+    estimates["bias_at_reference"] = Estimate(float(c[0]), float(se[0]), du)
     for j in range(1, order + 1):
-        estimates[f"c{j}"] = Estimate(float(c[j]), float(math.sqrt(cov[j, j])), f"{du}/K^{j}" if j > 1 else f"{du}/K")
+        estimates[f"c{j}"] = Estimate(float(c[j]), float(se[j]), f"{du}/K^{j}" if j > 1 else f"{du}/K")
     dt = temp - t_ref
     correction = sum(c[j] * dt ** j for j in range(1, order + 1)) if order else np.zeros_like(v)
     out = np.where(ok, v - correction, np.nan)

@@ -323,6 +323,12 @@ def warmup(data: object, *, rate: float, alpha: float = 0.01) -> PrepResult:
     # any central value conditions the sums; the median of at most ~10^5 evenly spread samples
     ref = float(np.nanmedian(v[:: max(1, v.size // 100_000)]))
     ybar = _block_means_of(d, v, ref)
+    # The fit runs on the block means scaled by an exact power of two into [0.5, 1) (their
+    # squares and the whitened products cannot overflow or underflow at 1e±200): A, b∞, the RSS
+    # and the covariance are scaled back below; T, the test and the noise ratio are scale free.
+    peak = float(np.max(np.abs(ybar))) if ybar.size else 0.0
+    shift = math.frexp(peak)[1] if peak > 0 and math.isfinite(peak) else 0
+    ybar = np.ldexp(ybar, -shift)
     t_lo = float(d.edges[1]) * tau0
     t_hi = max(v.size * tau0 * _T_MAX_SHARE, 2.0 * t_lo)
     grid = np.geomspace(t_lo, t_hi, _GRID)
@@ -341,7 +347,8 @@ def warmup(data: object, *, rate: float, alpha: float = 0.01) -> PrepResult:
         p = _p_value(u, k - 2, arc)
     cov = _covariance(d, nz, tau, amp, rss, k)
     extra = {"noise_model": "white + random-walk bias (REML)", "random_walk_ratio": nz.rho}
-    return _result(v, rate_f, alpha_f, d, tau, amp, b_inf + ref, cov, u, p, (t_lo, t_hi), j, arc, extra)
+    return _result(v, rate_f, alpha_f, d, tau, amp, b_inf, cov, u, p, (t_lo, t_hi), j, arc, extra,
+                   shift=shift, ref=ref)
 
 
 def _covariance(d: _Design, nz: _Noise, tau: float, amp: float, rss: float, k: int) -> np.ndarray:
@@ -363,8 +370,12 @@ def _se(cov: np.ndarray, i: int) -> float:
 
 def _result(v: np.ndarray, rate: float, alpha: float, d: _Design, tau: float, amp: float, b_inf: float,
             cov: np.ndarray, u: float, p: float, t_range: tuple[float, float], j: int, arc: float,
-            extra: dict[str, object]) -> PrepResult:
-    """Decide, place the end, cut, and write the record."""
+            extra: dict[str, object], *, shift: int = 0, ref: float = 0.0) -> PrepResult:
+    """Decide, place the end, cut, and write the record.
+
+    ``amp``, ``b_inf`` and ``cov`` are those of the fit on the block means less ``ref`` scaled by
+    2**-shift: the decision is scale free; the estimates are reported in the data's unit.
+    """
     n = v.size
     duration = n / rate
     detected = p < alpha
@@ -396,8 +407,8 @@ def _result(v: np.ndarray, rate: float, alpha: float, d: _Design, tau: float, am
                       f" ({t_end:.4g} s needed, {duration:.4g} s recorded); nothing is cut",
                       PrepWarning, stacklevel=caller_stacklevel())
     else:
-        notes.append(f"warm-up detected (p = {p:.2g}): T = {tau:.4g} ± {se_t:.2g} s, A = {amp:.4g} ±"
-                     f" {se_a:.2g}; the record is analysed from {end_index / rate:.6g} s"
+        notes.append(f"warm-up detected (p = {p:.2g}): T = {tau:.4g} ± {se_t:.2g} s, A = {math.ldexp(amp, shift):.4g}"
+                     f" ± {math.ldexp(se_a, shift):.2g}; the record is analysed from {end_index / rate:.6g} s"
                      f" (sample {end_index}, {end_index} of {n} samples left out)")
         if at_bound == "fastest":
             notes.append("the time constant is faster than the first block: T is not resolved")
@@ -408,8 +419,13 @@ def _result(v: np.ndarray, rate: float, alpha: float, d: _Design, tau: float, am
     if np.isnan(out).all():
         raise DataError("warmup: no valid sample is left after the end of the warm-up")
     out.flags.writeable = False
-    estimates = {"time_constant": Estimate(tau, se_t, "s"), "amplitude": Estimate(amp, se_a, "data"),
-                 "settled_bias": Estimate(b_inf, se_b, "data"), "end": Estimate(t_end, se_end, "s")}
+    def unscaled(value: float) -> float:
+        return math.ldexp(value, shift) if math.isfinite(value) else value
+
+    estimates = {"time_constant": Estimate(tau, se_t, "s"),
+                 "amplitude": Estimate(unscaled(amp), unscaled(se_a), "data"),
+                 "settled_bias": Estimate(unscaled(b_inf) + ref, unscaled(se_b), "data"),
+                 "end": Estimate(t_end, se_end, "s")}
     details = {"detected": bool(detected), "p_value": p, "statistic": u, "settled": bool(settled),
                "end_index": cut if detected and settled else (None if detected else 0),
                "end_time": cut / rate if detected and settled else (None if detected else 0.0),
