@@ -227,7 +227,7 @@ def block_kernel(coeffs: tuple[float, ...], scale: float, *, centred: bool = Fal
     return kernel
 
 
-def window_mean_kernel(scale_by_m: bool = True) -> GapKernel:
+def window_mean_kernel() -> GapKernel:
     """Gap kernel of the overlapped standard variance on frequency samples: the sample
     variance of the sums of every window of m samples free of gaps, over m²."""
     def kernel(y: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

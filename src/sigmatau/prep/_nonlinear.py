@@ -52,15 +52,21 @@ def _cov(jac: np.ndarray, rss: float, n: int) -> np.ndarray:
         return np.full((3, 3), np.inf)
 
 
-def fit_log(t: np.ndarray, y: np.ndarray) -> NonlinearFit:
-    """Fit ``y = a·ln(b·t + 1) + c`` to the valid samples (t ≥ 0 from the first sample)."""
-    from scipy.optimize import least_squares  # loaded on first use: import sigmatau stays light
+def _normalised(t: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, float, np.ndarray]:
+    """The valid samples on a unit time span and at unit spread, as both curve fits start:
+    ``(valid, span, u, y, scale, (y − ȳ)/scale)``, u = (t − t_first)/span over the valid samples."""
     valid = ~np.isnan(y)
     span = float(t[valid][-1] - t[valid][0]) or 1.0
     u = (t - t[valid][0]) / span
     uv, yv = u[valid], y[valid]
     scale = float(np.std(yv)) or 1.0
-    ys = (yv - float(np.mean(yv))) / scale
+    return valid, span, uv, yv, scale, (yv - float(np.mean(yv))) / scale
+
+
+def fit_log(t: np.ndarray, y: np.ndarray) -> NonlinearFit:
+    """Fit ``y = a·ln(b·t + 1) + c`` to the valid samples (t ≥ 0 from the first sample)."""
+    from scipy.optimize import least_squares  # loaded on first use: import sigmatau stays light
+    valid, span, uv, yv, scale, ys = _normalised(t, y)
 
     best = min(((beta, *_two_linear(np.log1p(beta * uv), ys)) for beta in _GRID), key=lambda z: z[2])
     beta0, (a0, c0), _ = best
@@ -91,12 +97,7 @@ def fit_log(t: np.ndarray, y: np.ndarray) -> NonlinearFit:
 def fit_diffusion(t: np.ndarray, y: np.ndarray) -> NonlinearFit:
     """Fit ``y = a + b·√(t + c)`` (c ≥ 0) to the valid samples (t from the first sample)."""
     from scipy.optimize import least_squares  # loaded on first use: import sigmatau stays light
-    valid = ~np.isnan(y)
-    span = float(t[valid][-1] - t[valid][0]) or 1.0
-    u = (t - t[valid][0]) / span
-    uv, yv = u[valid], y[valid]
-    scale = float(np.std(yv)) or 1.0
-    ys = (yv - float(np.mean(yv))) / scale
+    valid, span, uv, yv, scale, ys = _normalised(t, y)
 
     grid = np.concatenate(([0.0], _GRID))
     best = min(((gam, *_two_linear(np.sqrt(uv + gam), ys)) for gam in grid), key=lambda z: z[2])
