@@ -389,6 +389,21 @@ def _write_csv(path: Path, header: list[str], columns: list[Any]) -> None:
     _atomic_write(path, buf.getvalue().encode())
 
 
+def _write_stable32(path: Path, values: Any) -> None:
+    """A Stable32 data file: one value per line, no header, CRLF (Stable32 is a Windows program).
+
+    17 significant digits: a float64 phase record read back is bit-identical, so
+    statistics computed by Stable32 and by sigmatau on the file see the same samples.
+    """
+    import io as _io
+
+    import numpy as np
+
+    buf = _io.StringIO()
+    np.savetxt(buf, np.asarray(values, dtype=np.float64), fmt="%.17g", newline="\r\n")
+    _atomic_write(path, buf.getvalue().encode("ascii"))
+
+
 def _atomic_npy(path: Path, array: Any) -> None:
     import io as _io
 

@@ -9,7 +9,7 @@ from typing import Any, Optional
 
 from .common import (
     EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _atomic_npy, _atomic_npz, _check_replaceable,
-    _say, _write_csv,
+    _say, _write_csv, _write_stable32,
 )
 
 __all__ = ["add_cli"]
@@ -79,8 +79,8 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
 
     out = Path(args.output)
     suffix = out.suffix.lower()
-    if suffix not in (".csv", ".npy", ".npz"):
-        raise _UsageError(f"output {str(out)!r} must end in .csv, .npy or .npz")
+    if suffix not in (".csv", ".npy", ".npz", ".dat"):
+        raise _UsageError(f"output {str(out)!r} must end in .csv, .npy, .npz or .dat (Stable32, with --h)")
     _check_replaceable(out, "output", args.force)
     if args.duration <= 0:
         raise _UsageError(f"--duration {args.duration!r} must be positive")
@@ -91,6 +91,8 @@ def _cmd_simulate(args: argparse.Namespace, console: _Console) -> int:
         if args.drop is not None or args.gap:
             raise _UsageError("--drop and --gap apply to simulated IMU logs, not to --h power-law noise")
         return _simulate_power_law(args, out, suffix)
+    if suffix == ".dat":
+        raise _UsageError("a Stable32 .dat file holds one series: use it with --h (power-law noise)")
     parts = sorted({k.rsplit("-", 1)[0] for k in PRESETS})
     if args.preset not in parts and args.preset != "none":
         raise _UsageError(f"--preset {args.preset!r}: choose from {', '.join(parts)} or none")
@@ -229,6 +231,8 @@ def _simulate_power_law(args: argparse.Namespace, out: Path, suffix: str) -> int
     t = np.arange(n) / rate
     if suffix == ".csv":
         _write_csv(out, ["timestamp [s]", name], [t, y])
+    elif suffix == ".dat":
+        _write_stable32(out, y)
     elif suffix == ".npz":
         _atomic_npz(out, {"timestamp": t, name: y, "rate": np.float64(rate)})
     else:
@@ -254,7 +258,7 @@ def add_cli(sub: Any) -> None:
                   --gyro-B '3 deg/h' --gyro-K '1e-5'
               sigmatau simulate clock.npy --h 'h0=1e-22,h-1=1e-26' --duration 100000 --rate 1
             """) + _EPILOG_ERRORS)
-    sim.add_argument("output", help="file to write: .csv, .npz or .npy")
+    sim.add_argument("output", help="file to write: .csv, .npz, .npy, or .dat (a Stable32 data file, with --h)")
     sim.add_argument("--preset", default="lsm6dsl", help="part: lsm6dsl (default), lsm6dsm, adis16448, euroc, none")
     sim.add_argument("--sensors", default="gyro,accel", help="gyro, accel or both (default); three axes each")
     sim.add_argument("--duration", type=float, default=3600.0, help="seconds (default 3600)")
