@@ -14,13 +14,13 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
-from typing import Any, Optional, Sequence, Union
+from typing import Any, Callable, Optional, Sequence, Union
 
 from ..errors import ParameterError, SigmaTauError
 
 __all__ = [
     "OutputExistsError", "umask", "MANIFEST", "PARTIAL_MARKER", "read_manifest", "check_output_dir",
-    "remove_stale_partials",
+    "remove_stale_partials", "write_directory", "write_text",
 ]
 
 
@@ -35,9 +35,13 @@ def umask() -> int:
     return mask
 
 
-def _write_text(path: Path, text: str) -> None:
+def write_text(path: Path, text: str) -> None:
+    """``text`` into ``path`` as UTF-8, newlines as given (into a staging folder of :func:`write_directory`)."""
     with open(path, "w", encoding="utf-8", newline="") as fh:
         fh.write(text)
+
+
+_write_text = write_text
 
 
 #: The file listing what sigmatau wrote into an output directory (name, size, SHA-256 of each):
@@ -285,3 +289,44 @@ def _replace_manifest(folder: Path, text: str) -> None:
         if os.path.exists(tmp):
             os.unlink(tmp)
         raise
+
+
+def write_directory(out_dir: Union[str, os.PathLike], fill: Callable[[Path], None], version: str, *,
+                    force: bool = False, protect: Sequence[Union[str, os.PathLike]] = ()) -> list[Path]:
+    """Make ``out_dir`` whole or not at all: ``fill(folder)`` writes the files into a staging folder.
+
+    The staging folder is a temporary sibling marked with this process's PID
+    (:func:`remove_stale_partials`, called here, removes those of killed runs). A
+    new ``out_dir`` is that folder renamed into place. An existing one is accepted
+    only with ``force`` and only if it is empty or sigmatau wrote it
+    (:data:`MANIFEST`, :func:`check_output_dir`): then the files sigmatau wrote
+    there before are replaced (put back if anything fails) and every other file is
+    left as it is. The manifest lists the files written, with sizes and SHA-256.
+
+    Returns
+    -------
+    list of Path
+        The files written, in ``out_dir`` (the manifest included).
+    """
+    out = Path(out_dir)
+    target = out.resolve()
+    check_output_dir(out, force=force, protect=protect)
+    parent = target.parent
+    remove_stale_partials(parent)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=parent))
+    try:
+        _mark(tmp)
+        fill(tmp)
+        os.unlink(tmp / PARTIAL_MARKER)
+        entries = [_entry(p) for p in sorted(tmp.iterdir()) if p.is_file()]
+        if out.exists():
+            _replace_files(tmp, target, entries, version)
+            shutil.rmtree(tmp, ignore_errors=True)
+        else:
+            write_text(tmp / MANIFEST, _manifest_text(entries, version))
+            os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700; give the folder the usual mode
+            os.replace(tmp, target)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return sorted(target / n for n in [*(e["name"] for e in entries), MANIFEST])

@@ -31,8 +31,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
-import tempfile
 import warnings
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
@@ -41,15 +39,15 @@ from typing import Any, Optional, Sequence, Union
 
 from ..errors import ParameterError, SigmaTauError, SigmaTauWarning, caller_stacklevel
 from .directory import (
-    MANIFEST, OutputExistsError, PARTIAL_MARKER, _entry, _manifest_text, _mark, _replace_files, _write_text,
-    check_output_dir, read_manifest, remove_stale_partials, umask,
+    MANIFEST, OutputExistsError, PARTIAL_MARKER, _write_text, check_output_dir, read_manifest, remove_stale_partials,
+    umask, write_directory,
 )
 from .formats import KALIBR_KEYS, csv_cell, kalibr_yaml, model_csv, printable, statistics_csv
 
 __all__ = ["write_outputs", "check_output_dir", "read_manifest", "remove_stale_partials", "kalibr_yaml",
            "statistics_csv", "model_csv", "csv_cell", "printable", "OutputExistsError", "FIGURE_FORMATS",
            "KALIBR_KEYS", "MANIFEST", "PARTIAL_MARKER", "MAX_SIGNAL_FIGURES", "MAX_SIGMA_TAU_FIGURES",
-           "MAX_CURVES_PER_FIGURE"]
+           "MAX_CURVES_PER_FIGURE", "umask", "write_directory"]
 
 #: Figure formats :func:`write_outputs` can write.
 FIGURE_FORMATS = ("png", "svg", "pdf")
@@ -219,34 +217,14 @@ def write_outputs(
     list of Path
         The files written, in ``out_dir`` (the manifest included).
     """
-    out = Path(out_dir)
     fmts = [str(f).lower() for f in (figures or ())]
     for f in fmts:
         if f not in FIGURE_FORMATS:
             raise ParameterError(f"figure format {f!r} must be one of {', '.join(FIGURE_FORMATS)}")
     if report and fmts and "png" not in fmts:  # the report embeds the PNG files
         fmts.insert(0, "png")
-    target = out.resolve()
-    check_output_dir(out, force=force, protect=protect)
-    parent = target.parent
-    remove_stale_partials(parent)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{target.name}.partial-", dir=parent))
-    try:
-        _mark(tmp)
-        _write_all(analysis, tmp, fmts, report)
-        os.unlink(tmp / PARTIAL_MARKER)
-        entries = [_entry(p) for p in sorted(tmp.iterdir()) if p.is_file()]
-        if out.exists():
-            _replace_files(tmp, target, entries, analysis.version)
-            shutil.rmtree(tmp, ignore_errors=True)
-        else:
-            _write_text(tmp / MANIFEST, _manifest_text(entries, analysis.version))
-            os.chmod(tmp, 0o777 & ~umask())  # mkdtemp makes 0700; give the folder the usual mode
-            os.replace(tmp, target)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return sorted(target / n for n in [*(e["name"] for e in entries), MANIFEST])
+    return write_directory(out_dir, lambda folder: _write_all(analysis, folder, fmts, report), analysis.version,
+                           force=force, protect=protect)
 
 
 def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool) -> None:
