@@ -434,7 +434,7 @@ def test_greenhall_argument_checks():
         greenhall_edf(0, 2, 4, 4, 4, 1001, version="fast")
     assert greenhall_edf(0, 1, 4, 4, 4, 1001) > 0  # d = 1 is allowed
     with pytest.raises(ParameterError, match="statistic"):
-        edf("pdev", 0, 4, 1001)
+        edf("nosuchdev", 0, 4, 1001)
     with pytest.raises(ParameterError, match="m="):
         edf("oadev", 0, 0, 1001)
     with pytest.raises(ParameterError, match="m="):

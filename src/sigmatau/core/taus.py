@@ -44,6 +44,11 @@ STOP_RATIOS: dict[str, float] = {
     "stdev": 5, "adev": 5, "hdev": 5,
     "ostdev": 4, "oadev": 4, "mdev": 4, "tdev": 4, "ohdev": 4,
     "totdev": 2, "mtotdev": 3, "ttotdev": 3, "htotdev": 3,
+    # Not in Riley's table (Stable32 predates them): MHVAR's N−4m+1 terms keep N/5 at N/5,
+    # as MDEV's stop 4 keeps N/4; MHTOT ends with one subsequence, as MTOT does at N/3.
+    "mhdev": 5, "ldev": 5, "mhtotdev": 4,
+    # PVAR's N−2m terms: the stop of OADEV and MDEV (B1 then reaches down to 8 averages)
+    "pdev": 4,
 }
 
 # A context variable, not warnings.catch_warnings: the warning filters are

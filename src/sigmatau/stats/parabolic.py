@@ -16,7 +16,6 @@ worst, never O(N·m).
 
 from __future__ import annotations
 
-import math
 from typing import Optional
 
 import numpy as np
@@ -24,19 +23,20 @@ import numpy as np
 from ..core.driver import Statistic
 from ..core.numeric import CHUNK, sumsq_combination
 from ..core.result import StabilityResult
+from ..core.taus import STOP_RATIOS
 from ..core.validate import DataType
-from ..errors import DataError, ParameterError
+from ..errors import ParameterError
 from ..uncertainty.attach import CiMethod
 from ..uncertainty.confidence import ONE_SIGMA
 from .allan import _doc
-from .engine import finish, run
+from .engine import run
 
 __all__ = ["pdev", "PVAR", "PDEV_STOP_RATIO"]
 
 #: Keyword grids end at m ≤ ⌊N/4⌋, N phase points: Stable32's ratio for the other
 #: overlapped two-window statistics (OADEV, MDEV). Explicit factors may go up to
 #: ⌊(N−1)/2⌋, one term, as SigmaTheta does (its last factor is N/2).
-PDEV_STOP_RATIO = 4
+PDEV_STOP_RATIO = STOP_RATIOS["pdev"]
 
 
 class _ParabolicSums:
@@ -193,24 +193,6 @@ PVAR = Statistic("pdev", _pvar_phase, max_m=lambda n: (n - 1) // 2, stop_ratio=P
                  compute_freq=_pvar_freq)
 
 
-def _identified(result: StabilityResult, data: object) -> tuple[np.ndarray, np.ndarray]:
-    """α and its estimate at each row, identified as for MDEV (white and flicker PM told apart).
-
-    The modified family is PVAR's: both separate WPM from FPM and converge for
-    α ≥ −2, and MDEV has PDEV's stop ratio (B1 down to 8 averages).
-    """
-    from ..core.driver import validated_samples
-    from ..uncertainty.noiseid import identify
-
-    given, _ = validated_samples(data, remove_offset=True)
-    try:
-        ident = identify(given, result.m, data_type=result.data_type, family="mdev", n_terms=result.n)
-    except DataError:
-        nan = np.full(len(result), math.nan)
-        return nan, nan
-    return ident.alpha.astype(float), ident.alpha_estimate
-
-
 @_doc
 def pdev(
     data, *, rate: float = 1.0, data_type: DataType = "freq", taus="octave", m=None,
@@ -263,9 +245,5 @@ def pdev(
     """
     if alpha is not None and not isinstance(alpha, bool) and alpha in (-3, -4):
         raise ParameterError(f"alpha={alpha!r}: PVAR diverges for FWFM and RRFM; pdev takes alpha from -2 to 2")
-    result = run(PVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
-                 alpha=alpha, confidence=confidence, ci=ci, raw=True)
-    if ci is None or alpha is not None or len(result) == 0:
-        return finish(result, data, result.data_type, alpha=alpha, confidence=confidence, ci=ci)
-    return finish(result, data, result.data_type, confidence=confidence, ci=ci,
-                  identified=_identified(result, data))
+    return run(PVAR, data, rate=rate, data_type=data_type, taus=taus, m=m, points_per_decade=points_per_decade,
+               alpha=alpha, confidence=confidence, ci=ci)

@@ -9,10 +9,11 @@ numpy and scipy only and knows nothing about the estimators themselves.
 EDF rules by statistic (numerics.md §2):
 
 * ``adev``, ``oadev``, ``mdev``, ``tdev``, ``hdev``, ``ohdev`` (and the
-  modified Hadamard ``mhdev``): the Greenhall–Riley combined algorithm,
+  modified Hadamard ``mhdev`` and ``ldev``): the Greenhall–Riley combined algorithm,
   :func:`greenhall_edf`.
 * ``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev``, ``theo1``, ``theobr``,
-  ``theoh``: the empirical formulas of SP1065 and Howe et al.
+  ``theoh``: the empirical formulas of SP1065 and Howe et al.; ``mhtotdev``:
+  the same form with coefficients measured by Monte Carlo (none is published).
 * ``stdev``: ``K − 1`` independent averages (white FM only).
 
 All EDFs take ``N``, the number of **phase** points (frequency samples + 1).
@@ -39,6 +40,7 @@ from .empirical_edf import _EMPIRICAL_ALPHAS, _empirical_edf, edf_oadev_simple
 # _sw and _sx are imported from here by tests/test_confidence.py.
 from .greenhall import _sw, _sx  # noqa: F401
 from .greenhall import _GREENHALL_STATS, _greenhall_inverse, greenhall_edf
+from .pdev_edf import PDEV_ALPHAS, pdev_edf_scalar
 
 __all__ = [
     "ONE_SIGMA",
@@ -72,7 +74,7 @@ class ConfidenceInterval(NamedTuple):
 
 
 #: Statistics with an EDF rule.
-EDF_STATISTICS: tuple[str, ...] = tuple(_GREENHALL_STATS) + tuple(_EMPIRICAL_ALPHAS)
+EDF_STATISTICS: tuple[str, ...] = tuple(_GREENHALL_STATS) + tuple(_EMPIRICAL_ALPHAS) + ("pdev",)
 
 _NAMES = {-4: "RRFM", -3: "FWFM", -2: "RWFM", -1: "FFM", 0: "WFM", 1: "FPM", 2: "WPM"}
 
@@ -88,6 +90,11 @@ def _check_statistic(statistic: object) -> str:
 
 def _check_pair(statistic: str, alpha: int) -> None:
     """Raise ParameterError when (statistic, alpha) has no EDF rule."""
+    if statistic == "pdev":
+        if alpha not in PDEV_ALPHAS:
+            raise ParameterError(f"pdev with alpha={alpha} ({_NAMES[alpha]}): the variance diverges"
+                                 " (needs alpha > -3)")
+        return
     if statistic in _GREENHALL_STATS:
         d = _GREENHALL_STATS[statistic][0]
         if alpha + 2 * d <= 1:
@@ -116,8 +123,15 @@ def _row_statistic(statistic: str, m: int) -> str:
     so does :func:`sigmatau.htotdev`), so that row takes OHVAR's EDF; the HTOT
     formula and the SP1065 Table 5 forms describe other estimators (Table 5's
     FFM form at m = 1 gives ν ≈ 0.87 for any N, an interval from zero).
+    MHTOT at m = 1 is likewise MHVAR(τ0) (:func:`sigmatau.stats.modhadamard.mhtotdev`).
     """
-    return "ohdev" if statistic == "htotdev" and m == 1 else statistic
+    if m == 1 and statistic in _AT_ONE:
+        return _AT_ONE[statistic]
+    return statistic
+
+
+#: Statistics that report another estimator at m = 1 (see :func:`_row_statistic`).
+_AT_ONE = {"htotdev": "ohdev", "mhtotdev": "mhdev"}
 
 
 # ν depends only on its five arguments; the Greenhall sums cost milliseconds while a
@@ -126,6 +140,8 @@ def _row_statistic(statistic: str, m: int) -> str:
 @functools.lru_cache(maxsize=4096)
 def _edf_scalar(statistic: str, alpha: int, m: int, N: int, version: str) -> tuple[float, str]:
     """``(ν, "")``, or ``(nan, reason)`` when the record is too short (checked arguments)."""
+    if statistic == "pdev":
+        return pdev_edf_scalar(alpha, m, N)
     if statistic in _GREENHALL_STATS:
         d, modified, overlapped = _GREENHALL_STATS[statistic]
         inv, why = _greenhall_inverse(alpha, d, m, modified, overlapped, N, version)
@@ -169,7 +185,7 @@ def edf(statistic: str, alpha: int, m: int, N: int, *, version: Version = "full"
     statistic                     rule                      α
     ============================  ========================  ====================
     adev, oadev, mdev, tdev       Greenhall, d = 2          2 … −2
-    hdev, ohdev, mhdev            Greenhall, d = 3          2 … −4
+    hdev, ohdev, mhdev, ldev      Greenhall, d = 3          2 … −4
     totdev                        ν = b·N/m − c             0, −1, −2
     totdev                        SP1065 Table 5 (FPM)      1
     mtotdev, ttotdev              ν = b·N/m − c             2 … −2
@@ -178,6 +194,8 @@ def edf(statistic: str, alpha: int, m: int, N: int, *, version: Version = "full"
     htotdev, 1 < m < 16           SP1065 Table 5            1 … −2
     htotdev, 1 < m < 16           ν = (M/m)/(b0 + b1·m/M)   −3, −4
     htotdev, m = 1                as ohdev (HTOT is OHVAR)  2 … −4
+    mhtotdev, m ≥ 2               ν = (N/m)/(b0 + b1·m/N)   2 … −4 (Monte Carlo)
+    mhtotdev, m = 1               as mhdev (it is MHVAR)    2 … −4
     theo1, theobr, theoh          Theo1 formulas            2 … −2
     stdev                         ν = ⌊(N−1)/m⌋ − 1         0
     ============================  ========================  ====================

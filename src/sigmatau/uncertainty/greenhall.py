@@ -52,6 +52,7 @@ _GREENHALL_STATS = {
     "hdev": (3, False, False),
     "ohdev": (3, False, True),
     "mhdev": (3, True, True),
+    "ldev": (3, True, True),  # τ²·MHVAR·3/10: MHVAR's EDF
 }
 
 

@@ -74,6 +74,9 @@ FAMILY_ALIASES: dict[str, str] = {
     "mdev": "modified", "tdev": "modified", "mtotdev": "modified", "ttotdev": "modified",
     "theoh": "modified",
     "hdev": "hadamard", "ohdev": "hadamard", "htotdev": "hadamard",
+    "mhdev": "hadamard", "ldev": "hadamard", "mhtotdev": "hadamard",
+    # PVAR separates white from flicker PM and converges for α ≥ −2, as MVAR does
+    "pdev": "modified",
 }
 
 #: Range of α each family supports: (dmax, lowest α, highest α).

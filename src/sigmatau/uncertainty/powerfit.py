@@ -25,8 +25,8 @@ _SLOPE_TABLES = {
     "adev": _SLOPES_ALLAN, "oadev": _SLOPES_ALLAN, "totdev": _SLOPES_ALLAN,
     "hdev": _SLOPES_ALLAN, "ohdev": _SLOPES_ALLAN, "htotdev": _SLOPES_ALLAN,
     "theo1": _SLOPES_ALLAN, "theobr": _SLOPES_ALLAN, "theoh": _SLOPES_ALLAN,
-    "mdev": _SLOPES_MOD, "mtotdev": _SLOPES_MOD,
-    "tdev": _SLOPES_TIME, "ttotdev": _SLOPES_TIME,
+    "mdev": _SLOPES_MOD, "mtotdev": _SLOPES_MOD, "mhdev": _SLOPES_MOD, "mhtotdev": _SLOPES_MOD,
+    "tdev": _SLOPES_TIME, "ttotdev": _SLOPES_TIME, "ldev": _SLOPES_TIME,
 }
 
 
