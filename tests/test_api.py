@@ -6,14 +6,16 @@ import sys
 import sigmatau
 
 STATISTICS = [
-    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
-    "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
+    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "mhdev", "ldev", "pdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev", "mhtotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
 ]
 OTHER_NAMES = [
     "theobr_kappa", "compute_channels", "NoiseModel", "imu", "units", "checks",
     "ONE_SIGMA", "edf", "deviation_interval", "identify", "local_slopes", "fit_power_law",
     "power_law_noise", "mixed_noise", "confidence", "datasets", "filterchain", "generate", "noiseid", "prep",
     "dynamic", "DynamicResult", "StationarityCheck",
+    "compare", "gcodev", "three_cornered_hat", "cornered_hat",
+    "spectral", "psd", "spectrum_to_sigma", "rms_jitter", "deadtime_correction",
 ]
 
 

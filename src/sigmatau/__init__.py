@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import sys as _sys
 
-from . import checks, confidence, datasets, filterchain, generate, imu, noiseid, prep, units
+from . import checks, compare, confidence, datasets, filterchain, generate, imu, noiseid, prep, spectral, units
+from .compare import cornered_hat, gcodev, three_cornered_hat
+from .spectral import deadtime_correction, psd, rms_jitter, spectrum_to_sigma
 from .core.driver import register_streamed as _register_streamed
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
@@ -21,6 +23,8 @@ from .uncertainty.confidence import ONE_SIGMA, deviation_interval, edf
 from .errors import DataError, ParameterError, RangeWarning, SigmaTauError, SigmaTauWarning
 from .noise.generate import mixed_noise, power_law_noise
 from .stats.hadamard import hdev, ohdev
+from .stats.modhadamard import ldev, mhdev, mhtotdev
+from .stats.parabolic import pdev
 from .imu.model import NoiseModel
 from .uncertainty.noiseid import fit_power_law, identify, local_slopes
 from .core.result import StabilityResult
@@ -31,9 +35,12 @@ from .stats.total import htotdev, mtotdev, totdev, ttotdev
 __all__ = [
     "__version__",
     # statistics
-    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev",
-    "totdev", "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
+    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "mhdev", "ldev", "pdev",
+    "totdev", "mtotdev", "ttotdev", "htotdev", "mhtotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
     "theobr_kappa", "compute_channels",
+    # comparing devices (covariances, cornered hats) and the frequency domain
+    "compare", "gcodev", "three_cornered_hat", "cornered_hat",
+    "spectral", "psd", "spectrum_to_sigma", "rms_jitter", "deadtime_correction",
     # the statistics over sliding windows (non-stationarity)
     "dynamic", "DynamicResult", "StationarityCheck",
     # uncertainty and noise identification

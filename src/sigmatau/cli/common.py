@@ -132,10 +132,16 @@ def _showwarning(message: Any, category: type, filename: str, lineno: int, file:
     _say(f"sigmatau: warning: {message}", err=True)
 
 
-def _add_input_options(p: argparse.ArgumentParser) -> None:
+_LOG_HELP = ("CSV/TSV/text, .npy/.npz, Stable32 data, ROS 1 .bag, ROS 2 bag directory (sqlite3 or MCAP), HDF5 (.h5)"
+             " or Parquet")
+
+
+def _add_input_options(p: argparse.ArgumentParser, *, many: bool = False) -> None:
     g = p.add_argument_group("input")
-    g.add_argument("log", help="the log: CSV/TSV/text, .npy/.npz, Stable32 data, ROS 1 .bag, ROS 2 bag directory"
-                               " (sqlite3 or MCAP), HDF5 (.h5) or Parquet")
+    if many:
+        g.add_argument("logs", nargs="+", metavar="LOG", help=f"the logs, read with the same options: {_LOG_HELP}")
+    else:
+        g.add_argument("log", help=f"the log: {_LOG_HELP}")
     g.add_argument("--format", help="reader, when detection is not wanted: csv, stable32, npy, npz, rosbag1,"
                                     " rosbag2, hdf5, parquet")
     g.add_argument("--columns", help="channels by column name or 0-based index, comma-separated"
@@ -179,8 +185,8 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
     g = p.add_argument_group("analysis")
     g.add_argument("--stat", default=default_stats,
                    help=f"statistics, comma-separated (default {default_stats}); any of stdev, ostdev, adev, oadev,"
-                        " mdev, tdev, hdev, ohdev, totdev, mtotdev, ttotdev, htotdev, theo1, theobr, theoh, mtie,"
-                        " tierms")
+                        " mdev, tdev, hdev, ohdev, mhdev, ldev, pdev, totdev, mtotdev, ttotdev, htotdev, mhtotdev,"
+                        " theo1, theobr, theoh, mtie, tierms")
     g.add_argument("--taus", default="octave", help="τ grid: octave (default), decade, all, log")
     g.add_argument("--confidence", type=float, default=0.6827, help="two-sided coverage of the intervals"
                                                                      " (default 0.6827, ±1σ)")

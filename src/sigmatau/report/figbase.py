@@ -39,6 +39,7 @@ STATISTIC_COLORS: Mapping[str, str] = {
     "tdev": "#CC79A7", "ttotdev": "#CC79A7",
     "stdev": "#000000", "ostdev": "#000000",
     "mtie": "#7F7F7F", "tierms": "#7F7F7F",
+    "mhdev": "#009E73", "mhtotdev": "#009E73", "ldev": "#CC79A7", "pdev": "#E69F00",
 }
 _FALLBACK_COLORS = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#56B4E9", "#D55E00", "#000000")
 
@@ -48,14 +49,16 @@ TERM_COLORS: Mapping[str, str] = {"Q": "#AA4499", "N": "#44AA99", "B": "#999933"
 
 _MARKERS = {"oadev": "o", "adev": "o", "mdev": "s", "mtotdev": "s", "ohdev": "^", "hdev": "^",
             "htotdev": "^", "totdev": "D", "theoh": "P", "theo1": "P", "theobr": "P", "tdev": "v",
-            "ttotdev": "v", "stdev": "x", "ostdev": "x", "mtie": "*", "tierms": "*"}
+            "ttotdev": "v", "stdev": "x", "ostdev": "x", "mtie": "*", "tierms": "*", "mhdev": "<",
+            "mhtotdev": "<", "ldev": "v", "pdev": ">"}
 _DISPLAY = {"oadev": "OADEV", "adev": "ADEV", "mdev": "MDEV", "tdev": "TDEV", "hdev": "HDEV",
             "ohdev": "OHDEV", "totdev": "TOTDEV", "mtotdev": "MTOTDEV", "ttotdev": "TTOTDEV",
             "htotdev": "HTOTDEV", "theo1": "Theo1", "theobr": "TheoBR", "theoh": "TheoH",
             "stdev": "STDEV", "ostdev": "OSTDEV", "mtie": "MTIE", "tierms": "TIE rms",
+            "mhdev": "MHDEV", "ldev": "LDEV", "mhtotdev": "MHTOTDEV", "pdev": "PDEV",
             "oadev_raw": "OADEV before temperature compensation"}
 #: Statistics in the phase (time-error) unit: drawn on a right-hand axis.
-_TIME_STATS = frozenset({"tdev", "ttotdev", "mtie", "tierms"})
+_TIME_STATS = frozenset({"tdev", "ttotdev", "mtie", "tierms", "ldev"})
 #: Statistics drawn prominently (the one the IMU model is read from).
 _PROMINENT = frozenset({"oadev", "adev"})
 
