@@ -63,7 +63,14 @@ BATCH_CLUSTER = ("sigmatau batch '/data/line3/*.csv' --out /data/line3-fleet "
                  "--scheduler tcp://10.0.0.5:8786")
 CHUNKED = "sigmatau stats month.npy --chunked --rate 1000 --stat oadev,mdev,totdev"
 HELP = "sigmatau COMMAND --help"
-EXERCISED = {DEMO, *TOUR, BATCH, BATCH_CLUSTER, CHUNKED, HELP}
+COMPARE_TOUR = [
+    "sigmatau simulate rig.csv --preset lsm6dsl --sensors gyro --duration 600",
+    "sigmatau compare rig.csv --out rig-hat",
+    "sigmatau psd rig.csv --out rig-psd",
+]
+COMPARE_LOGS = "sigmatau compare a.csv b.csv c.csv --columns gyro_z"
+STABLE32_OUT = "sigmatau simulate clock.dat --h 'h0=1e-22' --data-type phase --duration 10000"
+EXERCISED = {DEMO, *TOUR, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT}
 
 
 def test_every_readme_command_is_exercised():
@@ -126,7 +133,28 @@ def test_readme_batch_existing_scheduler(tmp_path):
     assert len(list((tmp_path / "fleet" / "logs").iterdir())) == 3
 
 
-@pytest.mark.parametrize("command", ["demo", "analyze", "stats", "simulate", "batch"])
+def test_readme_compare_and_psd(tmp_path):
+    for cmd in COMPARE_TOUR:
+        r = _ok(cmd, tmp_path)
+    for name in ("compare.csv", "compare.json", "compare.png", "report.html"):
+        assert (tmp_path / "rig-hat" / name).is_file(), name
+    for name in ("psd.csv", "psd.json", "psd.png", "report.html"):
+        assert (tmp_path / "rig-psd" / name).is_file(), name
+    assert "gyro_z" in r.stdout and "dominates" in r.stdout
+    for seed, name in enumerate("abc"):
+        _ok(f"sigmatau simulate {name}.csv --preset lsm6dsl --sensors gyro --duration 300 --seed {seed}", tmp_path)
+    r = _ok(COMPARE_LOGS, tmp_path)
+    # one table per log, each named after its file
+    assert [line.split()[0] for line in r.stdout.splitlines() if line.endswith("OADEV [rad/s]")] == ["a", "b", "c"]
+
+
+def test_readme_stable32_output(tmp_path):
+    _ok(STABLE32_OUT, tmp_path)
+    values = (tmp_path / "clock.dat").read_text().split()
+    assert len(values) == 10_000
+
+
+@pytest.mark.parametrize("command", ["demo", "analyze", "stats", "compare", "psd", "simulate", "batch"])
 def test_readme_help(tmp_path, command):
     r = _ok(HELP.replace("COMMAND", command), tmp_path, timeout=120)
     assert "examples:" in r.stdout and "exit codes" in r.stdout

@@ -58,8 +58,9 @@ Assumptions and how it degrades:
   (measured in tests/test_compare.py);
 * for N ≥ 4 the classical estimate is the least-squares one, not the
   maximum-likelihood one: still exact in law, but not the narrowest possible;
-* ν comes from sigmatau's EDF; where that EDF is off (see the report of issue
-  15 for OADEV at m < 16) the intervals are off by the same factor.
+* ν comes from sigmatau's EDF; where that EDF departs from the exact EDF of the
+  sampled noise (Greenhall's model for the unmodified statistics at m < 16,
+  docs/compare.md) the intervals are off by the same factor.
 """
 
 from __future__ import annotations
