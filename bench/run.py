@@ -33,24 +33,26 @@ PREFIX = "@@bench "
 CLASSIC = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev"]
 TOTALS = ["mtotdev", "ttotdev", "htotdev"]
 #: Statistics allantools has, in the order they are run.
-PEER_STATS = CLASSIC + ["tierms", "theo1"] + TOTALS + ["mtie"]
+PEER_STATS = CLASSIC + ["tierms", "theo1"] + TOTALS + ["mtie", "pdev"]
 #: Peers whose cost is O(N·m) per τ in Python loops or window reductions.
-SLOW_PEERS = {"theo1", "mtotdev", "ttotdev", "htotdev", "mtie"}
+SLOW_PEERS = {"theo1", "mtotdev", "ttotdev", "htotdev", "mtie", "pdev"}
+#: The modified Hadamard family and PDEV (issue 15): O(N) per τ like the classic statistics.
+MODERN = ["mhdev", "ldev", "pdev"]
 ALL_STATS = [
-    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev",
-    "mtotdev", "ttotdev", "htotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
+    "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "mhdev", "ldev", "pdev", "totdev",
+    "mtotdev", "ttotdev", "htotdev", "mhtotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
 ]
 NOISES = ("wfm", "wpm", "fpm", "ffm", "rwfm")
 
 #: Record lengths (frequency samples) of each target: full run, --quick and --tiny.
 SIZES = {
     "full": {"classic": 10**6, "theo1_peer": 10**4, "theo1_own": 10**6, "total_peer": 10**4,
-             "total_own": 10**6, "mtie": 10**6, "memory": 10**7},
+             "total_own": 10**6, "mtie": 10**6, "pdev_peer": 10**4, "modern_own": 10**6, "memory": 10**7},
     "quick": {"classic": 10**5, "theo1_peer": 10**3, "theo1_own": 10**5, "total_peer": 10**3,
-              "total_own": 10**4, "mtie": 10**5, "memory": 10**5},
+              "total_own": 10**4, "mtie": 10**5, "pdev_peer": 10**3, "modern_own": 10**5, "memory": 10**5},
     # Smoke test of the command (tests/test_bench.py): every target, nothing measured meaningfully.
     "tiny": {"classic": 300, "theo1_peer": 300, "theo1_own": 300, "total_peer": 300,
-             "total_own": 300, "mtie": 300, "memory": 300},
+             "total_own": 300, "mtie": 300, "pdev_peer": 300, "modern_own": 300, "memory": 300},
 }
 
 
@@ -76,6 +78,9 @@ TARGETS = [
     Target("total-peer", "MTOT/TTOT/HTOT ≥ 1000× faster than allantools", tuple(TOTALS), "total_peer", "peer", 1000.0),
     Target("total-own", "MTOT/TTOT/HTOT within 300× our OADEV time", tuple(TOTALS), "total_own", "own", 300.0),
     Target("mtie-peer", "MTIE ≥ 100× faster than allantools", ("mtie",), "mtie", "peer", 100.0),
+    Target("pdev-peer", "PDEV ≥ 100× faster than allantools", ("pdev",), "pdev_peer", "peer", 100.0),
+    Target("modern-own", "MHDEV/LDEV/PDEV within 10× our OADEV time", tuple(MODERN), "modern_own", "own", 10.0),
+    Target("mhtot-own", "MHTOTDEV within 300× our OADEV time", ("mhtotdev",), "total_own", "own", 300.0),
     Target("memory", "peak memory of every statistic < 10× the input", tuple(ALL_STATS), "memory", "memory", 10.0),
 ]
 
@@ -230,6 +235,10 @@ def build_plan(args: argparse.Namespace) -> tuple[list[TimingCase], list[MemoryC
             add(stat, sizes["total_peer"], True)
             add(stat, sizes["total_own"], False)
         add("mtie", sizes["mtie"], True)
+        add("pdev", sizes["pdev_peer"], True)
+        for stat in MODERN:
+            add(stat, sizes["modern_own"], False)
+        add("mhtotdev", sizes["total_own"], False)
         if wanted is not None:
             cases = {k: c for k, c in cases.items() if c.stat in wanted}
     if args.no_timing:
