@@ -5,14 +5,15 @@ Scripts written for allantools keep working, faster, after one changed line::
     import sigmatau.compat.allantools as allantools
 
 The module provides ``adev``, ``oadev``, ``mdev``, ``tdev``, ``hdev``, ``ohdev``,
-``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev``, ``theo1``, ``mtie`` and
+``pdev``, ``totdev``, ``mtotdev``, ``ttotdev``, ``htotdev``, ``theo1``, ``mtie`` and
 ``tierms`` with allantools' signature ``f(data, rate=1.0, data_type="phase",
 taus=None)`` and its return value ``(taus, devs, errs, ns)``, four float64
-arrays. The values come from sigmatau's estimators (``ci=None``, no bias
+arrays, and ``gcodev(data_1, data_2, rate, data_type, taus)`` (allantools'
+unsigned Groslambert codeviation ``sqrt|cov|``; :func:`sigmatau.gcodev` keeps the
+sign). The values come from sigmatau's estimators (``ci=None``, no bias
 correction); allantools itself is not needed. Everything else allantools offers
-(``pdev``, ``gradev``, ``gcodev``, ``Dataset``, ``noise``, ``tau_generator``,
-conversions, plotting, confidence intervals) is not provided: import it from
-allantools.
+(``gradev``, ``Dataset``, ``noise``, ``tau_generator``, conversions, plotting,
+confidence intervals) is not provided: import it from allantools.
 
 Conventions kept from allantools (the tests hold this module to allantools 2024.6)
 ----------------------------------------------------------------------------------
@@ -35,7 +36,7 @@ Conventions kept from allantools (the tests hold this module to allantools 2024.
   Stable32 convention). The deviations are the same.
 * **ns** is the number of terms of each estimator, as a float array: adev
   ⌊(N−1)/m⌋−1, oadev N−2m, mdev/tdev N−3m+1, hdev ⌊(N−1)/m⌋−2, ohdev N−3m,
-  totdev N−2, mtotdev/ttotdev N−3m+1, htotdev N−3m (N−3 at m = 1), theo1
+  pdev N−2m, totdev N−2, mtotdev/ttotdev N−3m+1, htotdev N−3m (N−3 at m = 1), theo1
   (N−m)·m/2, mtie/tierms N−m, for N phase points.
 * **errs** is ``devs/sqrt(ns)``, except theo1 (``devs/sqrt(N−m)``) and tierms
   (zeros), as in allantools. These are not confidence intervals; use
@@ -95,14 +96,15 @@ from typing import Callable, Literal, Union
 import numpy as np
 import numpy.typing as npt
 
-from ..stats import allan, hadamard, theo, tie, total
+from ..compare import covariance
+from ..stats import allan, hadamard, parabolic, theo, tie, total
 from ..core.validate import as_series, check_data_type, check_rate
 from ..errors import DataError, ParameterError
 from ..core.taus import long_factors_expected
 
 __all__ = [
-    "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev",
-    "mtotdev", "ttotdev", "htotdev", "theo1", "mtie", "tierms",
+    "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "pdev", "totdev",
+    "mtotdev", "ttotdev", "htotdev", "theo1", "mtie", "tierms", "gcodev",
 ]
 
 #: The four arrays every function returns: taus, devs, errs, ns.
@@ -158,6 +160,7 @@ _SPECS: dict[str, _Spec] = {
     "tdev": _Spec(allan.tdev, _overlap(3, 1), _dev_over_sqrt_n),
     "hdev": _Spec(hadamard.hdev, _blocks_minus(2), _dev_over_sqrt_n),
     "ohdev": _Spec(hadamard.ohdev, _overlap(3), _dev_over_sqrt_n),
+    "pdev": _Spec(parabolic.pdev, _overlap(2), _dev_over_sqrt_n),
     "totdev": _Spec(total.totdev, lambda m, n: np.full(m.shape, n - 2), _dev_over_sqrt_n),
     "mtotdev": _Spec(total.mtotdev, _overlap(3, 1), _dev_over_sqrt_n, third=True),
     "ttotdev": _Spec(total.ttotdev, _overlap(3, 1), _dev_over_sqrt_n, third=True),
@@ -347,6 +350,14 @@ def ohdev(
     return _compute("ohdev", data, rate, data_type, taus)
 
 
+@_doc("pdev")
+def pdev(
+    data: npt.ArrayLike, rate: float = 1.0, data_type: DataType = "phase", taus: TausArg = None,
+) -> AllantoolsResult:
+    """Parabolic deviation, allantools-style (= OADEV at m = 1)."""
+    return _compute("pdev", data, rate, data_type, taus)
+
+
 @_doc("totdev")
 def totdev(
     data: npt.ArrayLike, rate: float = 1.0, data_type: DataType = "phase", taus: TausArg = None,
@@ -401,3 +412,38 @@ def tierms(
 ) -> AllantoolsResult:
     """RMS time interval error (errs are zeros, as in allantools)."""
     return _compute("tierms", data, rate, data_type, taus)
+
+
+def gcodev(
+    data_1: npt.ArrayLike, data_2: npt.ArrayLike, rate: float = 1.0, data_type: DataType = "phase",
+    taus: TausArg = None,
+) -> AllantoolsResult:
+    """Groslambert codeviation of two simultaneous series, allantools-style: ``sqrt|cov|``, unsigned.
+
+    The overlapped Allan covariance ``Σ Δ²x1·Δ²x2 / (2τ²(N−2m))`` of the two phase
+    series, with allantools' conventions (``taus``, ``ns = N − 2m``,
+    ``errs = devs/sqrt(ns)``). allantools drops the sign; :func:`sigmatau.gcodev`
+    keeps it (a negative covariance is information: the two series share a device
+    with opposite signs).
+
+    See Also
+    --------
+    sigmatau.gcodev : the signed covariance with sigmatau's conventions.
+    sigmatau.cornered_hat : each device's deviation, with intervals.
+    """
+    rate_f = check_rate(rate)
+    dtype = check_data_type(data_type)
+    a, b = _series(data_1, dtype), _series(data_2, dtype)
+    if a.size != b.size:
+        raise DataError(f"gcodev: the two series have {a.size} and {b.size} samples; they must be simultaneous")
+    n_phase = a.size + 1 if dtype == "freq" else a.size
+    ms = _factors(taus, n_phase, rate_f, third=False, even=False)
+    ms = ms[n_phase - 2 * ms > 1]
+    if ms.size == 0:
+        raise DataError(f"gcodev: no averaging time of {_describe(taus)} leaves more than one term"
+                        f" with {n_phase} phase points at rate={rate_f:g} Hz")
+    with long_factors_expected():
+        res = covariance.gcodev(a, b, rate=rate_f, data_type=dtype, m=ms)
+    devs = np.abs(np.asarray(res.dev, dtype=np.float64))
+    ns = np.asarray(res.n, dtype=np.float64)
+    return ms / rate_f, devs, devs / np.sqrt(ns), ns
