@@ -226,12 +226,12 @@ def test_estimates_consistent_with_truth(levels, rng):
     assert np.all(np.abs(r.classical_var - truth**2)[:, loud] <= 4.0 * sd[:, loud])
 
 
-def _coverage(levels, ms, trials, seed, n=2000):
+def _coverage(levels, ms, trials, seed, n=2000, alpha=0):
     g = np.random.default_rng(seed)
     hit = np.zeros((len(ms), len(levels)))
     negative = np.zeros_like(hit)
     for _ in range(trials):
-        r = cornered_hat(_clocks(levels, n, g), data_type="freq", m=ms, alpha=0)
+        r = cornered_hat(_clocks(levels, n, g), data_type="freq", m=ms, alpha=alpha)
         truth = _truth(levels, ms)
         hit += (r.low <= truth) & (truth <= r.high)
         negative += r.classical_var < 0
@@ -250,6 +250,14 @@ def test_coverage_quiet_clock_small():
     cov, negative = _coverage((1.0, 10.0, 10.0), [64], trials=120, seed=20261125)
     assert negative[0, 0] > 0.3
     _assert_nominal(cov, 120)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("levels", [(1.0, 2.0, 3.0), (1.0, 10.0, 10.0)])
+def test_coverage_on_the_identified_path(levels):
+    # What users get: no alpha, the noise type identified at each τ on the first difference.
+    cov, _ = _coverage(levels, [32, 128], trials=250, seed=20261126, alpha=None)
+    _assert_nominal(cov, 250)
 
 
 @pytest.mark.slow

@@ -488,3 +488,20 @@ def test_intervals_when_wired_into_confidence():
     low, high = deviation_interval(res.dev, res.edf, ONE_SIGMA)
     np.testing.assert_allclose(res.ci_low, low)
     np.testing.assert_allclose(res.ci_high, high)
+
+
+@pytest.mark.parametrize("alpha", [2, 0, -2])
+def test_coverage_on_the_identified_path(alpha):
+    # What users get: pdev(y) with the noise type identified at each τ (no alpha given).
+    # 400 records of 2048 samples per type; the 68.3 % interval must cover the exact
+    # expectation within 3 binomial standard deviations (±7.0 points).
+    runs, ms = 400, [4, 16, 64]
+    rng = np.random.default_rng([20261125, alpha + 10])
+    cover = np.zeros(len(ms))
+    for _ in range(runs):
+        res = pdev(power_law_noise(2049, alpha, data_type="phase", rng=rng), data_type="phase", m=ms)
+        truth = np.sqrt([expected_pvar(alpha, m) for m in ms])
+        cover += (res.ci_low <= truth) & (truth <= res.ci_high)
+    band = 3.0 * math.sqrt(ONE_SIGMA * (1 - ONE_SIGMA) / runs)
+    for m, c in zip(ms, cover / runs):
+        assert abs(c - ONE_SIGMA) <= band, (alpha, m, c)
