@@ -7,7 +7,9 @@ table of MHDEV/LDEV/MHTOT values was found (SP1065 prints none for the NBS sets;
 allantools has none; StabLab.jl's tests print no reference numbers), so every value
 here is checked against an oracle written below with plain loops, against exact
 identities, or against exact expectations computed here from the estimator's
-weights.
+weights. MHTOT's O(N) sums (sigmatau.stats.modhadamard_sums) are held to the direct
+kernel on every noise type and to the definition in exact rationals and in
+np.longdouble.
 """
 
 from __future__ import annotations
@@ -22,7 +24,8 @@ import sigmatau
 from sigmatau.confidence import ONE_SIGMA, edf
 from sigmatau.errors import DataError, ParameterError
 from sigmatau.generate import power_law_noise
-from sigmatau.stats.modhadamard import _mhtot_formula_kernel, ldev, mhdev, mhtotdev
+from sigmatau.stats.modhadamard import _mhtot_formula_kernel, ldev, mhdev, mhtot_sums, mhtotdev
+from sigmatau.stats.modhadamard_sums import FAST_MIN_M, mhtot_sums_fast, remove_quadratic
 
 # ------------------------------------------------------------------ plain oracles
 
@@ -115,6 +118,166 @@ def test_mhtot_kernel_blocks_agree(rng):
         b, nb = mhtot_sums(x, m, block=1)
         assert na == nb == 300 - 4 * m + 1
         assert a == pytest.approx(b, rel=1e-12)
+
+
+# ------------------------------------------------------------------ the O(N) MHTOT sums
+
+
+def exact_mhtot_sum(x: np.ndarray, m: int) -> Fraction:
+    """Σ_n Σ_j w_j(n)² of the MHTOT construction in exact rational arithmetic.
+
+    The float64 samples are converted exactly; the least-squares quadratic is removed by
+    projection on the orthogonal polynomials 1, k - c, (k - c)² - mean (c the centre),
+    then reflection, m-sums and third differences follow the definition."""
+    length = 4 * m
+    xs = [Fraction(float(v)) for v in x]
+    k = [Fraction(2 * i - (length - 1), 2) for i in range(length)]
+    mean_k2 = sum(v * v for v in k) / length
+    basis = [[Fraction(1)] * length, k, [v * v - mean_k2 for v in k]]
+    norms = [sum(v * v for v in b) for b in basis]
+    total = Fraction(0)
+    for n in range(len(xs) - length + 1):
+        s = xs[n : n + length]
+        coef = [sum(a * b for a, b in zip(bv, s)) / nv for bv, nv in zip(basis, norms)]
+        r = [s[i] - sum(c * bv[i] for c, bv in zip(coef, basis)) for i in range(length)]
+        ext = r[::-1] + r + r[::-1]
+        run = [Fraction(0)]
+        for v in ext:
+            run.append(run[-1] + v)
+        a = [run[j + m] - run[j] for j in range(len(ext) - m + 1)]  # m·(m-average)
+        for j in range(8 * m):
+            w = a[j] - 3 * a[j + m] + 3 * a[j + 2 * m] - a[j + 3 * m]
+            total += w * w
+    return total / (m * m)
+
+
+def longdouble_mhtot_sum(x: np.ndarray, m: int) -> float:
+    """The same sum by plain loops over the subsequences in np.longdouble (64-bit mantissa on x86)."""
+    ld = np.longdouble
+    xs = np.asarray(x, dtype=ld)
+    length = 4 * m
+    k = np.arange(length, dtype=ld) - ld(length - 1) / 2
+    basis = [np.ones(length, dtype=ld), k, k * k - (k * k).mean()]
+    total = ld(0)
+    for n in range(xs.size - length + 1):
+        s = xs[n : n + length] - xs[n]
+        r = s.copy()
+        for b in basis:
+            r -= (b @ s) / (b @ b) * b
+        ext = np.concatenate((r[::-1], r, r[::-1]))
+        run = np.concatenate(([ld(0)], np.cumsum(ext)))
+        a = run[m:] - run[:-m]
+        w = a[: 8 * m] - 3 * a[m : 9 * m] + 3 * a[2 * m : 10 * m] - a[3 * m : 11 * m]
+        total += w @ w
+    return total / (m * m)
+
+
+def red_slice(alpha: int, n: int, gen: np.random.Generator) -> np.ndarray:
+    """The last n phase points of a 2**16-point record: large values, small local variation
+    (a quadratic 10⁷ times what remains for random-run FM), the hardest case for rounding."""
+    return power_law_noise(2**16, alpha, data_type="phase", rng=gen)[-n:]
+
+
+_FAST_MS = [2, 3, 4, 5, 7, 8, 16, 33, 64]
+
+
+@pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2, -3, -4])
+@pytest.mark.parametrize("data_type", ["phase", "freq"])
+def test_mhtot_fast_matches_direct_kernel(rng, alpha, data_type):
+    """The O(N) expansion against the direct O(N·m) kernel on every noise type, for phase and
+    for frequency input (integrated as mhtotdev does). N = 1200 gives several blocks of
+    3m window starts at every m below (and a partial last block). Measured agreement is
+    ~1e-14; 1e-10 is the brief's bound, 10⁴ times the measured worst case."""
+    data = power_law_noise(1200, alpha, data_type=data_type, rng=rng) + 7.0
+    x = data if data_type == "phase" else to_phase(data, 1.0)
+    for m in _FAST_MS:
+        fast, n_fast = mhtot_sums_fast(x, m)
+        direct, n_direct = mhtot_sums(x, m)
+        assert n_fast == n_direct == x.size - 4 * m + 1
+        assert fast == pytest.approx(direct, rel=1e-10), m
+
+
+def test_mhtot_fast_batches_agree(rng):
+    # One block per batch and many blocks per batch give the same sum.
+    x = rng.standard_normal(700).cumsum()
+    for m in (2, 5, 16):
+        assert mhtot_sums_fast(x, m, block=1)[0] == pytest.approx(mhtot_sums_fast(x, m)[0], rel=1e-13)
+
+
+def test_mhtot_fast_short_records(rng):
+    # One subsequence, a block shorter than 3m, a partial last block: every m from 1 to 11.
+    for m in range(1, 12):
+        for extra in (0, 1, 2, 3 * m - 1, 3 * m, 3 * m + 1, 7 * m + 2):
+            x = rng.standard_normal(4 * m + extra).cumsum().cumsum()
+            fast, n_fast = mhtot_sums_fast(x, m)
+            direct, n_direct = mhtot_sums(x, m)
+            assert n_fast == n_direct == extra + 1
+            assert fast == pytest.approx(direct, rel=1e-10), (m, extra)
+
+
+@pytest.mark.parametrize("alpha", [0, -2, -4])
+def test_mhtot_sums_against_exact_rationals(rng, alpha):
+    """Both kernels against the definition in exact rational arithmetic, on the hardest input
+    (the end of a long red-noise record). The float64 kernels were 1e-10 off before the
+    quadratic was removed in extended precision on an exact basis (remove_quadratic); now
+    the measured worst case is ~2e-14, and 1e-12 leaves a margin of 50."""
+    x = red_slice(alpha, 130, rng)
+    for m in (2, 3, 5, 8):
+        exact = float(exact_mhtot_sum(x, m))
+        assert mhtot_sums_fast(x, m)[0] == pytest.approx(exact, rel=1e-12), m
+        assert mhtot_sums(x, m)[0] == pytest.approx(exact, rel=1e-12), m
+
+
+@pytest.mark.parametrize("alpha", [2, -2, -4])
+def test_mhtot_fast_against_extended_precision(rng, alpha):
+    """Larger m and several blocks against the plain loops in np.longdouble (whose own error,
+    checked against rationals above on this kind of input, is ~1e-14)."""
+    x = red_slice(alpha, 900, rng)
+    for m in (16, 33, 64):
+        want = float(longdouble_mhtot_sum(x, m))
+        assert mhtot_sums_fast(x, m)[0] == pytest.approx(want, rel=1e-12), m
+
+
+def test_remove_quadratic_rounds_at_extended_precision():
+    """A quadratic ~10⁷ times the residual (as at the end of a long random-run record) is
+    removed with an error of order 2⁻⁶⁴·|quadratic|, the extended-precision rounding: the bound
+    below is 40 such units. Orthonormalised float64 basis vectors, as before, leave
+    ~2⁻⁵³·|quadratic| (checked here to exceed the bound, so the test can fail)."""
+    k = np.arange(40.0)
+    row = 9.0e12 + 3.0e5 * k + 1.0e4 * k * k + np.cos(1.7 * k)
+    xs = [Fraction(float(v)) for v in row]
+    c = [Fraction(2 * i - 39, 2) for i in range(40)]
+    c2 = [v * v - sum(w * w for w in c) / 40 for v in c]
+    proj = [(sum(xs) / 40, [Fraction(1)] * 40), (sum(a * b for a, b in zip(c, xs)) / sum(v * v for v in c), c),
+            (sum(a * b for a, b in zip(c2, xs)) / sum(v * v for v in c2), c2)]
+    want = np.array([float(xs[i] - sum(coef * b[i] for coef, b in proj)) for i in range(40)])
+    bound = 40 * 2.0**-64 * np.ptp(row)
+    got = remove_quadratic(row[None, :])[0]
+    assert np.abs(got - want).max() <= bound
+    if np.finfo(np.longdouble).nmant >= 63:  # the float64 contrast only where longdouble is wider
+        d = row - row[0]
+        q, _ = np.linalg.qr(np.stack((np.ones(40), k - 19.5, (k - 19.5) ** 2), axis=1))
+        assert np.abs(d - q @ (q.T @ d) - want).max() > bound
+
+
+def test_mhtotdev_switches_to_the_fast_path(rng, monkeypatch):
+    # m ≥ FAST_MIN_M goes through the fast sums, smaller m (but 1) through the direct kernel.
+    import sigmatau.stats.modhadamard as module
+    calls = []
+
+    def spy(name, kernel):
+        def wrapped(x, m, block=None):
+            calls.append((name, m))
+            return kernel(x, m, block)
+        return wrapped
+
+    monkeypatch.setattr(module, "mhtot_sums", spy("direct", module.mhtot_sums))
+    monkeypatch.setattr(module, "mhtot_sums_fast", spy("fast", module.mhtot_sums_fast))
+    x = rng.standard_normal(500).cumsum()
+    r = mhtotdev(x, data_type="phase", m=[1, 2, FAST_MIN_M, 20], ci=None)
+    assert calls == [("direct", 2), ("fast", FAST_MIN_M), ("fast", 20)]
+    for m, var in zip(r.m[1:], r.var[1:]):
+        assert var == pytest.approx(plain_mhtot(x, int(m), 1.0), rel=1e-10)
 
 
 # ------------------------------------------------------------------ identities

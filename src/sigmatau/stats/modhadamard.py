@@ -9,10 +9,11 @@ frequency drift, and converges for noise down to random-run FM (α > −5).
   differences (phase data) or double window sums of the frequency samples
   (:class:`~sigmatau.core.numeric.WindowSums`, frequency data).
 * MHTOT detrends and reflects every 4m-point subsequence separately, as MTOT
-  does with 3m points; its kernel is vectorised over blocks of subsequences and
-  costs O(N·m) per τ (the O(N) expansion of
-  :func:`~sigmatau.stats.total_sums.tot_sums_fast` is specific to MTOT/HTOT's
-  second differences and linear detrending and has not been carried over).
+  does with 3m points. The direct kernel :func:`mhtot_sums` (vectorised over
+  blocks of subsequences, O(N·m) per τ) is the oracle and serves m below
+  ``FAST_MIN_M``; from there on :func:`~sigmatau.stats.modhadamard_sums.mhtot_sums_fast`
+  expands the sum of squares into running sums, O(N) per τ, as
+  :func:`~sigmatau.stats.total_sums.tot_sums_fast` does for MTOT.
 
 Records with missing samples are computed over their gap-free runs and pooled
 (:func:`sigmatau.core.gaps.pooled_over_runs`): exactly the terms, or MHTOT
@@ -37,6 +38,7 @@ from ..uncertainty.attach import CiMethod
 from ..uncertainty.confidence import ONE_SIGMA
 from .allan import _doc
 from .engine import run
+from .modhadamard_sums import FAST_MIN_M, mhtot_sums_fast, remove_quadratic
 from .total_sums import BLOCK_ELEMENTS
 
 __all__ = ["mhdev", "ldev", "mhtotdev"]
@@ -101,14 +103,6 @@ def _ldev_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
 # --- MHTOT kernel ----------------------------------------------------------------------
 
 
-def _quadratic_basis(length: int) -> np.ndarray:
-    """Orthonormal basis (length × 3) of the polynomials of degree ≤ 2 on 0 … length-1."""
-    k = np.arange(length, dtype=float)
-    k = (k - k.mean()) / max(length - 1, 1)  # centred and scaled: a well-conditioned Vandermonde
-    q, _ = np.linalg.qr(np.stack((np.ones(length), k, k * k), axis=1))
-    return q
-
-
 def mhtot_sums(x: np.ndarray, m: int, block: Optional[int] = None) -> tuple[float, int]:
     """``Σ_n Σ_j w_j(n)²`` over the ``N - 4m + 1`` subsequences of the MHTOT construction.
 
@@ -118,12 +112,12 @@ def mhtot_sums(x: np.ndarray, m: int, block: Optional[int] = None) -> tuple[floa
     ``w_j = a_j - 3a_{j+m} + 3a_{j+2m} - a_{j+3m}``, j = 0 … 8m-1, where ``a_j``
     is the mean of ``e_j … e_{j+m-1}``. Returns the double sum and the number
     of subsequences. Subsequences go in blocks of about ``block`` values per
-    temporary array, so memory is O(N) + O(block) whatever m.
+    temporary array, so memory is O(N) + O(block) whatever m. The quadratic is
+    removed in extended precision (:func:`~sigmatau.stats.modhadamard_sums.remove_quadratic`).
     """
     m = int(m)
     length = 4 * m
     windows = x.size - length + 1
-    q = _quadratic_basis(length)
     rows = max(1, min(windows, (block or BLOCK_ELEMENTS) // (3 * length + 1)))
     view = sliding_window_view(x, length)
     ext = np.empty((rows, 3 * length + 1))
@@ -131,8 +125,7 @@ def mhtot_sums(x: np.ndarray, m: int, block: Optional[int] = None) -> tuple[floa
     for start in range(0, windows, rows):
         blk = view[start : start + rows]
         r = blk.shape[0]
-        s = blk - blk[:, :1]  # an offset changes nothing; removing it first keeps digits
-        s = s - np.einsum("ik,jk->ij", np.einsum("ij,jk->ik", s, q), q)
+        s = remove_quadratic(blk)
         e = ext[:r]
         e[:, 0] = 0.0
         e[:, 1 : length + 1] = s[:, ::-1]
@@ -146,12 +139,23 @@ def mhtot_sums(x: np.ndarray, m: int, block: Optional[int] = None) -> tuple[floa
     return total / float(m) ** 2, windows
 
 
+def mhtot_total(x: np.ndarray, m: int) -> tuple[float, int]:
+    """``Σ_n Σ_j w_j(n)²`` and the subsequence count, by the faster kernel for this m.
+
+    The O(N) expansion (:func:`~sigmatau.stats.modhadamard_sums.mhtot_sums_fast`)
+    from ``FAST_MIN_M`` on; below it the direct kernel :func:`mhtot_sums` is faster.
+    """
+    if m < FAST_MIN_M:
+        return mhtot_sums(x, m)
+    return mhtot_sums_fast(x, m)
+
+
 def _mhtot_formula_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     """MHTOT by its defining construction at every factor, m = 1 included."""
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
     for i, m in enumerate(ms):
-        total, windows = mhtot_sums(x, int(m))
+        total, windows = mhtot_total(x, int(m))
         var[i] = total / (8.0 * m * 6.0 * (m * tau0) ** 2 * windows)
         n[i] = windows
     return var, n
@@ -285,9 +289,10 @@ def mhtotdev(
     MTOT does, is not enough with third differences: on random-walk and
     random-run FM the reflection kinks then dominate (Monte Carlo ratio to
     MHVAR 2 for RWFM, 70 … 1000 for RRFM, against 0.8 with the quadratic).
-    Cost O(N·m) per τ, vectorised over blocks of subsequences (an octave grid
-    takes about 1 s at N = 4096 and 20 s at N = 16384 on the 2-core reference
-    machine). Keyword grids stop at m ≤ N/4 (one subsequence at the last τ, as
+    Cost O(N) per τ (:mod:`sigmatau.stats.modhadamard_sums`; an octave grid
+    takes about 0.3 s at N = 16384, 1 s at N = 10⁵ and 10–15 s at N = 10⁶ on
+    the 2-core reference machine, against 6 s, 4 min and about 7.5 h, by
+    extrapolation, for the O(N·m) direct kernel). Keyword grids stop at m ≤ N/4 (one subsequence at the last τ, as
     MTOT's N/3). The EDF is a Monte-Carlo fit
     (:mod:`sigmatau.uncertainty.empirical_edf`): none is published.
 
