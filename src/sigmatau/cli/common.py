@@ -316,6 +316,48 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
                         " a value such as 'gyro.N=4 mdps/sqrt(Hz)' (repeatable)")
 
 
+def _add_folder_outputs(p: argparse.ArgumentParser, files: str, rows: str) -> None:
+    """The outputs of a command that prints a table: ``--csv`` instead, or ``--out`` a folder besides."""
+    o = p.add_argument_group("outputs")
+    o.add_argument("--out", help=f"also write {files}, the figure and report.html here (atomically)")
+    o.add_argument("--csv", help=f"write {rows} as CSV to this file ('-' for stdout) instead of printing")
+    o.add_argument("--force", action="store_true", help="replace an existing output")
+    o.add_argument("--figures", default="png,svg", help="figure formats: png, svg, pdf (default png,svg)")
+    o.add_argument("--no-figures", action="store_true", help="no figures")
+    o.add_argument("--no-report", action="store_true", help="no report.html")
+
+
+def _check_folder_outputs(args: argparse.Namespace, inputs: Sequence[Path]) -> list[str]:
+    """The figure formats of :func:`_add_folder_outputs`, after refusing, before any work, an
+    output folder or CSV file that is an input, exists without ``--force`` or is not ours."""
+    from ..report.outputs import FIGURE_FORMATS, check_output_dir
+
+    if not 0 < args.confidence < 1:
+        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
+    fmts = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
+    for f in fmts:
+        if f not in FIGURE_FORMATS:
+            raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
+    if args.out:
+        check_output_dir(Path(args.out), force=args.force, protect=list(inputs))
+    if args.csv and args.csv != "-":
+        if Path(args.csv).resolve() in inputs:
+            raise _UsageError(f"--csv {args.csv!r} is an input; choose another file")
+        _check_replaceable(Path(args.csv), "--csv", args.force, stdout_hint=True)
+    return fmts
+
+
+def _emit_csv(args: argparse.Namespace, text: str) -> None:
+    """``--csv`` text to standard output (escaped on a terminal) or, atomically, to its file."""
+    from ..report.outputs import printable
+
+    if args.csv == "-":
+        sys.stdout.write(printable(text, multiline=True) if sys.stdout.isatty() else text)
+    else:
+        _atomic_write(Path(args.csv), text.encode())
+        _say(f"wrote {args.csv}", err=True)
+
+
 def _datasheet(specs: Sequence[str]) -> Any:
     from ..pipeline.analysis import datasheet_reference
 

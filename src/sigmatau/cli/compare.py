@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import textwrap
 from pathlib import Path
 from typing import Any, Sequence
 
 from ..report.outputs import printable
 from .common import (
-    EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _add_input_options, _atomic_write,
-    _check_replaceable, _read_options, _say,
+    EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _add_folder_outputs, _add_input_options,
+    _check_folder_outputs, _emit_csv, _read_options, _say,
 )
 
 __all__ = ["add_cli"]
@@ -85,25 +84,13 @@ def _cmd_compare(args: argparse.Namespace, console: _Console) -> int:
     from .._version import __version__
     from ..compare import cornered_hat
     from ..report.comparison import hat_csv, hat_table, write_comparison
-    from ..report.outputs import FIGURE_FORMATS, check_output_dir
     from ..stats import FUNCTIONS
 
     stat = args.stat.strip().lower()
     if stat not in HAT_STATISTICS:
         raise _UsageError(f"--stat {args.stat!r}: the cornered hat takes one of {', '.join(HAT_STATISTICS)}")
-    if not 0 < args.confidence < 1:
-        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
-    fmts = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
-    for f in fmts:
-        if f not in FIGURE_FORMATS:
-            raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
     inputs = [Path(p).resolve() for p in args.logs]
-    if args.out:
-        check_output_dir(Path(args.out), force=args.force, protect=inputs)
-    if args.csv and args.csv != "-":
-        if Path(args.csv).resolve() in inputs:
-            raise _UsageError(f"--csv {args.csv!r} is an input; choose another file")
-        _check_replaceable(Path(args.csv), "--csv", args.force, stdout_hint=True)
+    fmts = _check_folder_outputs(args, inputs)
     logs = _read_all(args, console)
     names, series, first = _series(logs)
     _check_alike(logs, series)
@@ -128,12 +115,7 @@ def _cmd_compare(args: argparse.Namespace, console: _Console) -> int:
                           confidence=args.confidence)
     unit = first.units.get(first.names[0], "")
     if args.csv:
-        text = hat_csv(result, unit)
-        if args.csv == "-":
-            sys.stdout.write(printable(text, multiline=True) if sys.stdout.isatty() else text)
-        else:
-            _atomic_write(Path(args.csv), text.encode())
-            _say(f"wrote {args.csv}", err=True)
+        _emit_csv(args, hat_csv(result, unit))
     else:
         _say(f"{len(result.names)} devices, {len(series[0]):,} samples at {first.rate:.6g} Hz, {first.data_type}"
              f" data, {stat.upper()}, {args.confidence:.2%} intervals")
@@ -178,11 +160,5 @@ def add_cli(sub: Any) -> None:
     g.add_argument("--stat", default="oadev", help=f"variance used: {', '.join(HAT_STATISTICS)} (default oadev)")
     g.add_argument("--taus", default="octave", help="τ grid: octave (default), decade, all, log")
     g.add_argument("--confidence", type=float, default=0.6827, help="coverage of the intervals (default ±1σ)")
-    o = p.add_argument_group("outputs")
-    o.add_argument("--out", help="also write compare.csv, compare.json, the figure and report.html here")
-    o.add_argument("--csv", help="write the table as CSV to this file ('-' for stdout) instead of printing it")
-    o.add_argument("--force", action="store_true", help="replace an existing output")
-    o.add_argument("--figures", default="png,svg", help="figure formats: png, svg, pdf (default png,svg)")
-    o.add_argument("--no-figures", action="store_true", help="no figures")
-    o.add_argument("--no-report", action="store_true", help="no report.html")
+    _add_folder_outputs(p, "compare.csv, compare.json", "every device's rows")
     p.set_defaults(func=_cmd_compare)

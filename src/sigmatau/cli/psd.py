@@ -3,43 +3,27 @@
 from __future__ import annotations
 
 import argparse
-import sys
 import textwrap
 from pathlib import Path
 from typing import Any
 
 from ..report.outputs import printable
 from .common import (
-    EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _add_input_options, _atomic_write,
-    _check_replaceable, _read, _say,
+    EXIT_OK, _Console, _EPILOG_ERRORS, _Formatter, _UsageError, _add_folder_outputs, _add_input_options,
+    _check_folder_outputs, _emit_csv, _read, _say,
 )
 
 __all__ = ["add_cli"]
 
 
 def _check_args(args: argparse.Namespace) -> list[str]:
-    from ..report.outputs import FIGURE_FORMATS, check_output_dir
-
-    if not 0 < args.confidence < 1:
-        raise _UsageError(f"--confidence {args.confidence!r} must be between 0 and 1")
     if args.segments < 1:
         raise _UsageError(f"--segments {args.segments!r} must be at least 1")
     if not args.bins_per_decade > 0:
         raise _UsageError(f"--bins-per-decade {args.bins_per_decade!r} must be positive")
     if args.carrier is not None and not args.carrier > 0:
         raise _UsageError(f"--carrier {args.carrier!r} must be a positive frequency in Hz")
-    fmts = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
-    for f in fmts:
-        if f not in FIGURE_FORMATS:
-            raise _UsageError(f"--figures: {f!r} is not one of {', '.join(FIGURE_FORMATS)}")
-    source = Path(args.log).resolve()
-    if args.out:
-        check_output_dir(Path(args.out), force=args.force, protect=[source])
-    if args.csv and args.csv != "-":
-        if Path(args.csv).resolve() == source:
-            raise _UsageError(f"--csv {args.csv!r} is the input; choose another file")
-        _check_replaceable(Path(args.csv), "--csv", args.force, stdout_hint=True)
-    return fmts
+    return _check_folder_outputs(args, [Path(args.log).resolve()])
 
 
 def _cmd_psd(args: argparse.Namespace, console: _Console) -> int:
@@ -55,12 +39,7 @@ def _cmd_psd(args: argparse.Namespace, console: _Console) -> int:
                             bins_per_decade=args.bins_per_decade, confidence=args.confidence, carrier=args.carrier)
         units[name] = log.units.get(name, "")
     if args.csv:
-        text = psd_csv(spectra, units)
-        if args.csv == "-":
-            sys.stdout.write(printable(text, multiline=True) if sys.stdout.isatty() else text)
-        else:
-            _atomic_write(Path(args.csv), text.encode())
-            _say(f"wrote {args.csv}", err=True)
+        _emit_csv(args, psd_csv(spectra, units))
     else:
         _say(f"{printable(log.source.path)}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type} data;"
              f" Welch, {args.segments} segments, {args.bins_per_decade:g} bins per decade")
@@ -98,11 +77,5 @@ def add_cli(sub: Any) -> None:
     g.add_argument("--bins-per-decade", type=float, default=10.0, help="log-frequency bins per decade (default 10)")
     g.add_argument("--confidence", type=float, default=0.6827, help="coverage of the intervals (default ±1σ)")
     g.add_argument("--carrier", type=float, metavar="HZ", help="carrier frequency ν0, for S_φ and L(f) in the outputs")
-    o = p.add_argument_group("outputs")
-    o.add_argument("--out", help="also write psd.csv, psd.json, the figure and report.html here")
-    o.add_argument("--csv", help="write the bins as CSV to this file ('-' for stdout) instead of the summary")
-    o.add_argument("--force", action="store_true", help="replace an existing output")
-    o.add_argument("--figures", default="png,svg", help="figure formats: png, svg, pdf (default png,svg)")
-    o.add_argument("--no-figures", action="store_true", help="no figures")
-    o.add_argument("--no-report", action="store_true", help="no report.html")
+    _add_folder_outputs(p, "psd.csv, psd.json", "every bin")
     p.set_defaults(func=_cmd_psd)
