@@ -356,3 +356,10 @@ def test_coverage_flicker_fm_quiet_clock():
         r = cornered_hat(rec, data_type="freq", m=ms, alpha=-1)
         hit += (r.low <= truth) & (truth <= r.high)
     _assert_nominal(hit / trials, trials)
+
+
+def test_the_same_record_twice_is_refused_in_one_line():
+    x = np.random.default_rng(4).standard_normal(500)
+    y = np.random.default_rng(5).standard_normal(500)
+    with pytest.raises(DataError, match=r"records 'A' and 'C' are the same"):
+        cornered_hat({"A": x, "B": y, "C": x + 3.0}, data_type="freq")

@@ -308,7 +308,21 @@ def _differences(data: object) -> tuple[list, list[np.ndarray]]:
     if len(sizes) > 1:
         raise DataError("the records must have the same length, got "
                         + ", ".join(f"{k!r}: {r.size}" for k, r in zip(keys, recs)))
+    _refuse_same(keys, recs)
     return keys, [r - recs[0] for r in recs[1:]]
+
+
+def _refuse_same(keys: list, recs: list[np.ndarray]) -> None:
+    """Two records that differ by a constant (the same file given twice, a copied column) leave
+    their pair nothing to compare: say so, instead of failing later on a constant series."""
+    for i in range(len(recs)):
+        for j in range(i + 1, len(recs)):
+            d = recs[j] - recs[i]
+            # equal up to the round-off of adding a constant to either record
+            scale = max(float(np.max(np.abs(recs[i]))), float(np.max(np.abs(recs[j])))) if d.size else 0.0
+            if d.size and float(np.max(d)) - float(np.min(d)) <= 8.0 * np.finfo(float).eps * scale:
+                raise DataError(f"records {keys[i]!r} and {keys[j]!r} are the same (they differ by a constant);"
+                                " a cornered hat needs independent devices")
 
 
 # ---------------------------------------------------------------- intervals
