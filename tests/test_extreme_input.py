@@ -27,8 +27,8 @@ from sigmatau.cli import main
 
 from helpers import assert_one_line_error
 
-STATISTICS = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "totdev", "mtotdev", "ttotdev", "htotdev",
-              "theo1", "theobr", "theoh", "mtie", "tierms", "stdev", "ostdev"]
+STATISTICS = ["adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "mhdev", "ldev", "pdev", "totdev", "mtotdev",
+              "ttotdev", "htotdev", "mhtotdev", "theo1", "theobr", "theoh", "mtie", "tierms", "stdev", "ostdev"]
 NO_INTERVAL = {"mtie", "tierms"}
 RTOL = 1e-12
 

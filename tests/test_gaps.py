@@ -50,6 +50,9 @@ WINDOW = {
     "mdev": lambda m: 3 * m, "tdev": lambda m: 3 * m, "mtotdev": lambda m: 3 * m,
     "ttotdev": lambda m: 3 * m, "htotdev": lambda m: 3 * m + 1, "theo1": lambda m: m + 1,
     "mtie": lambda m: m + 1,
+    "mhdev": lambda m: 4 * m, "ldev": lambda m: 4 * m, "mhtotdev": lambda m: 4 * m,
+    # PVAR's terms read 2m frequency samples (SigmaTheta's N − 2m terms), 2m + 1 phase points
+    "pdev": lambda m: 2 * m + 1,
 }
 #: on frequency data every statistic's term reads a whole window of samples
 FREQ_WINDOW = dict(WINDOW, oadev=lambda m: 2 * m + 1, ohdev=lambda m: 3 * m + 1, tierms=lambda m: m + 1)
