@@ -193,3 +193,20 @@ def test_stats_takes_the_new_statistics(rig, capsys):
     block = text.split("g1 [?] MHDEV")[1].split("\n\n")[0]
     sigma = [float(line.split()[5]) for line in block.splitlines()[2:] if line.strip()]
     np.testing.assert_allclose(sigma, expected.dev, rtol=5e-5)
+
+
+def test_psd_with_a_carrier_writes_phase_noise(tmp_path, capsys):
+    # Phase data in seconds of a 10 MHz oscillator: L(f) = 10·log10(S_φ/2), S_φ = (2πν0)²·S_x.
+    x = np.random.default_rng(9).normal(0.0, 1e-12, 20_000)
+    path = tmp_path / "osc-phase.dat"
+    np.savetxt(path, x, fmt="%.17g")
+    code, text, err = run_cli(["psd", path, "--rate", "1", "--data-type", "phase", "--carrier", "10e6",
+                               "--csv", "-"], capsys)
+    assert code == 0, err
+    rows = list(csv.DictReader(io.StringIO(text)))
+    r = psd(x, rate=1.0, data_type="phase", carrier=10e6, confidence=0.6827)
+    np.testing.assert_allclose([float(row["l_dbc_hz"]) for row in rows], r.l_dbc, rtol=1e-12)
+    # white PM: S_x = 2σ²/rate one-sided, so L is flat at 10·log10((2π·1e7)²·σ²); the top bins agree
+    flat = 10 * np.log10((2 * np.pi * 1e7) ** 2 * 1e-24)
+    top = [float(row["l_dbc_hz"]) for row in rows if float(row["f_hz"]) > 0.05]
+    assert np.mean(top) == pytest.approx(flat, abs=0.3)

@@ -291,7 +291,13 @@ def test_psd_phase_input_and_units(rng):
     r = psd(x, rate=1.0, data_type="phase", carrier=5e6)
     ry = psd(np.diff(x), rate=1.0)
     np.testing.assert_allclose(r.s_y, ry.s_y, rtol=1e-12)
-    np.testing.assert_allclose(r.s_x, r.s_y / (2 * math.pi * r.f) ** 2, rtol=1e-12)
+    # the samples are phase differences: S_y = |2·rate·sin(πf/rate)|²·S_x exactly
+    np.testing.assert_allclose(r.s_x, r.s_y / (2 * np.sin(math.pi * r.f)) ** 2, rtol=1e-12)
+    # white PM of h2 = 1e-20: S_x = h2/(2π)² flat; within the bins' χ² intervals up to Nyquist
+    # (the continuous (2πf)² would put the top bin 3.9 dB low)
+    truth = 1e-20 / (2 * math.pi) ** 2
+    inside = (r.lo / (2 * np.sin(math.pi * r.f)) ** 2 <= truth) & (truth <= r.hi / (2 * np.sin(math.pi * r.f)) ** 2)
+    assert inside[r.f > 0.1].mean() > 0.5 and inside[-3:].any()
     np.testing.assert_allclose(r.s_phi, (2 * math.pi * 5e6) ** 2 * r.s_x, rtol=1e-12)
     np.testing.assert_allclose(r.l_dbc, 10 * np.log10(r.s_phi / 2), rtol=1e-12)
     with pytest.raises(ParameterError, match="carrier"):

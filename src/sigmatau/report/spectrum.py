@@ -54,18 +54,21 @@ def psd_summary(name: str, r: Any, unit: str = "") -> str:
     return "\n".join(lines)
 
 
-_CSV_HEADER = ["channel", "f_hz", "s_y", "s_y_low", "s_y_high", "edf", "estimates_averaged", "model", "unit"]
+_CSV_HEADER = ["channel", "f_hz", "s_y", "s_y_low", "s_y_high", "edf", "estimates_averaged", "model", "unit",
+               "l_dbc_hz"]
 
 
 def psd_csv(spectra: Mapping[str, Any], units: Mapping[str, str]) -> str:
-    """One row per channel and log bin: the bin's mean S_y, its interval, EDF and the fitted model."""
+    """One row per channel and log bin: the bin's mean S_y, its interval, EDF, the fitted model and,
+    with a carrier, the phase noise L(f) in dBc/Hz (empty without one)."""
     buf = io.StringIO()
     buf.write(",".join(_CSV_HEADER) + "\n")
     for name, r in spectra.items():
         model = r.model(r.f)
+        l_dbc = r.l_dbc if r.carrier is not None else np.full(r.f.size, np.nan)
         for i in range(r.f.size):
             cells = [name, float(r.f[i]), float(r.s_y[i]), float(r.lo[i]), float(r.hi[i]), float(r.edf[i]),
-                     int(r.n_avg[i]), float(model[i]), _unit2(units.get(name, ""))]
+                     int(r.n_avg[i]), float(model[i]), _unit2(units.get(name, "")), float(l_dbc[i])]
             buf.write(",".join(csv_cell(c) for c in cells) + "\n")
     return buf.getvalue()
 
@@ -145,7 +148,8 @@ def spectra_dict(spectra: Mapping[str, Any], units: Mapping[str, str], *, source
             "s_y_high": _finite_list(r.hi), "edf": _finite_list(r.edf), "estimates_averaged": [int(v) for v in r.n_avg],
             "h": {str(a): float(v) for a, v in r.h.items()}, "h_low": {str(a): float(v) for a, v in r.h_lo.items()},
             "h_high": {str(a): float(v) for a, v in r.h_hi.items()},
-            "dominant": [{"f_low": float(a), "f_high": float(b), "alpha": int(c)} for a, b, c in r.dominant]}
+            "dominant": [{"f_low": float(a), "f_high": float(b), "alpha": int(c)} for a, b, c in r.dominant],
+            "l_dbc_hz": _finite_list(r.l_dbc) if r.carrier is not None else None}
     return out
 
 
