@@ -134,9 +134,9 @@ def test_rate_outside_range_is_a_parameter_error(series, rate):
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 def test_rate_at_the_range_ends_scales_exactly(series, data_type):
     # With m fixed, τ = m/rate; a deviation of frequency data does not depend on the rate,
-    # of phase data it is proportional to it; TDEV/TTOT/MTIE/TIE rms (phase units) are
+    # of phase data it is proportional to it; TDEV/TTOT/LDEV/MTIE/TIE rms (phase units) are
     # proportional to 1/rate for frequency data and independent of it for phase data.
-    phase_units = {"tdev", "ttotdev", "mtie", "tierms"}
+    phase_units = {"tdev", "ttotdev", "ldev", "mtie", "tierms"}
     for name in STATISTICS:
         f = getattr(sigmatau, name)
         ref = _quiet(f, series, data_type=data_type, rate=1.0, ci=None)
