@@ -10,7 +10,6 @@ start a formula, HTML, the terminal.
 from __future__ import annotations
 
 import datetime as _dt
-import html
 import io
 import json
 import math
@@ -21,8 +20,9 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from .directory import write_directory, write_text
-from .figbase import _DISPLAY, _FALLBACK_COLORS, _log_limits, _pretty, _style_log_axes, figure_to_bytes, new_figure
+from .figbase import _DISPLAY, _FALLBACK_COLORS, _log_limits, _pretty, _style_log_axes, new_figure, save_figure
 from .formats import csv_cell, printable
+from .html import _e
 
 __all__ = ["hat_table", "hat_csv", "hat_dict", "hat_figure", "write_comparison"]
 
@@ -143,10 +143,6 @@ text-align:right}th{background:#f2f2f2}td.l{text-align:left}figure img{max-width
 pre{background:#f6f6f6;border:1px solid #ddd;padding:.7em;overflow-x:auto;font-size:.85em}"""
 
 
-def _e(text: Any) -> str:
-    return html.escape(str(text), quote=True)
-
-
 def _page(data: Mapping[str, Any], png: Optional[bytes], note: str) -> str:
     import base64
 
@@ -199,11 +195,8 @@ def write_comparison(result: Any, out_dir: Union[str, os.PathLike], *, unit: str
     def fill(folder: Path) -> None:
         png = None
         if fmts:
-            fig = hat_figure(result, unit=unit, pairs=pairs)
-            for f in fmts:
-                blob = figure_to_bytes(fig, f)
-                (folder / f"compare.{f}").write_bytes(blob)
-                png = blob if f == "png" else png
+            save_figure(hat_figure(result, unit=unit, pairs=pairs), folder / "compare", fmts)
+            png = (folder / "compare.png").read_bytes() if "png" in fmts else None
         write_text(folder / "compare.csv", hat_csv(result, unit))
         write_text(folder / "compare.json", json.dumps(data, indent=1, allow_nan=False, ensure_ascii=False) + "\n")
         if report:

@@ -9,7 +9,6 @@ prefixes, HTML, the terminal); the folder is written by
 from __future__ import annotations
 
 import datetime as _dt
-import html
 import io
 import json
 import math
@@ -20,8 +19,9 @@ from typing import Any, Mapping, Optional, Sequence, Union
 import numpy as np
 
 from .directory import write_directory, write_text
-from .figbase import _FALLBACK_COLORS, _kind_of, _log_limits, _pretty, _style_log_axes, figure_to_bytes, new_figure
+from .figbase import _FALLBACK_COLORS, _kind_of, _log_limits, _pretty, _style_log_axes, new_figure, save_figure
 from .formats import csv_cell, printable
+from .html import _e
 
 __all__ = ["NOISE_NAMES", "IMU_NOISE_NAMES", "psd_summary", "psd_csv", "psd_figure", "spectra_dict", "write_spectra"]
 
@@ -107,10 +107,6 @@ def psd_figure(spectra: Mapping[str, Any], units: Mapping[str, str], *, title: O
     return fig
 
 
-def _e(text: Any) -> str:
-    return html.escape(str(text), quote=True)
-
-
 def _page(source: Mapping[str, Any], spectra: Mapping[str, Any], units: Mapping[str, str], png: Optional[bytes],
           version: str) -> str:
     import base64
@@ -166,11 +162,8 @@ def write_spectra(spectra: Mapping[str, Any], out_dir: Union[str, os.PathLike], 
     def fill(folder: Path) -> None:
         png = None
         if fmts:
-            fig = psd_figure(spectra, units)
-            for f in fmts:
-                blob = figure_to_bytes(fig, f)
-                (folder / f"psd.{f}").write_bytes(blob)
-                png = blob if f == "png" else png
+            save_figure(psd_figure(spectra, units), folder / "psd", fmts)
+            png = (folder / "psd.png").read_bytes() if "png" in fmts else None
         write_text(folder / "psd.csv", psd_csv(spectra, units))
         write_text(folder / "psd.json", json.dumps(data, indent=1, allow_nan=False, ensure_ascii=False) + "\n")
         if report:
