@@ -185,6 +185,21 @@ def test_results_of_other_settings_are_never_reused(logs, client, tmp_path):
         assert json.loads((d / "results.json").read_text())["settings"]["statistics"] == ["mdev"]
 
 
+def test_estimator_files_per_log(logs, client, tmp_path):
+    """--export reaches every log's folder: the files asked for, and Kalibr's only when asked."""
+    out = tmp_path / "o"
+    two = [str(logs / "log00.csv"), str(logs / "log01.csv")]
+    fleet = analyze_many(two, out, client=client, statistics="oadev", figures=None, report=False,
+                         exports="vins,gtsam", progress=False)
+    assert fleet.computed == 2
+    for d in _result_dirs(out):
+        names = {p.name for p in d.iterdir()}
+        assert {"vins_imu.yaml", "gtsam_imu_params.py"} <= names and "imu.yaml" not in names
+    with pytest.raises(ParameterError, match="must be one of"):
+        analyze_many(two, tmp_path / "bad", client=client, statistics="oadev", exports="ros", progress=False)
+    assert not (tmp_path / "bad").exists()
+
+
 def test_a_foreign_directory_is_not_used_as_out(logs, client, tmp_path):
     out = tmp_path / "proj"
     (out / "logs" / ".keepme").mkdir(parents=True)

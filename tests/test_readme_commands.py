@@ -63,6 +63,7 @@ BATCH_CLUSTER = ("sigmatau batch '/data/line3/*.csv' --out /data/line3-fleet "
                  "--scheduler tcp://10.0.0.5:8786")
 CHUNKED = "sigmatau stats month.npy --chunked --rate 1000 --stat oadev,mdev,totdev"
 HELP = "sigmatau COMMAND --help"
+EXPORT = "sigmatau analyze imu.csv --out imu-ekf --no-figures --export kalibr,vins,openvins,matlab,gtsam"
 COMPARE_TOUR = [
     "sigmatau simulate rig.csv --preset lsm6dsl --sensors gyro --duration 600",
     "sigmatau compare rig.csv --out rig-hat",
@@ -70,7 +71,7 @@ COMPARE_TOUR = [
 ]
 COMPARE_LOGS = "sigmatau compare a.csv b.csv c.csv --columns gyro_z"
 STABLE32_OUT = "sigmatau simulate clock.dat --h 'h0=1e-22' --data-type phase --duration 10000"
-EXERCISED = {DEMO, *TOUR, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT}
+EXERCISED = {DEMO, *TOUR, EXPORT, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT}
 
 
 def test_every_readme_command_is_exercised():
@@ -99,6 +100,13 @@ def test_readme_tour(tmp_path):
     # the last command prints Stable32-style tables of gyro_x only
     assert "gyro_x" in r.stdout and "oadev" in r.stdout.lower() and "mdev" in r.stdout.lower()
     assert "gyro_y" not in r.stdout
+
+
+def test_readme_export(tmp_path):
+    _ok("sigmatau simulate imu.csv --preset lsm6dsl --duration 300", tmp_path)
+    _ok(EXPORT, tmp_path)
+    written = {p.name for p in (tmp_path / "imu-ekf").iterdir()}
+    assert {"imu.yaml", "vins_imu.yaml", "kalibr_imu_chain.yaml", "imu_params.m", "gtsam_imu_params.py"} <= written
 
 
 def _line3(tmp_path: Path) -> None:

@@ -48,6 +48,7 @@ def add_cli(sub: Any) -> None:
               sigmatau analyze run.bag --list-topics
               sigmatau analyze rosbag2_dir --topic /imu --out run --force --figures png,svg,pdf
               sigmatau analyze log.csv --datasheet lsm6dsl --axis-rule rms
+              sigmatau analyze log.csv --export kalibr,vins,openvins  the estimators' parameter files
             """) + _EPILOG_ERRORS)
     _add_input_options(analyze)
     _add_analysis_options(analyze, "oadev,mdev,tdev,ohdev,totdev,theoh")

@@ -10,7 +10,7 @@ from ..scale.batch import (
     CONNECT_TIMEOUT, LIMIT_MARGIN, LOGS_DIR, OUTLIER_Z, analyze_many, check_scheduler_address, expand_patterns,
     local_worker_count, usable_cores,
 )
-from .common import EXIT_DATA, EXIT_OK, _datasheet, _Formatter, _read_options, _UsageError
+from .common import EXIT_DATA, EXIT_OK, _datasheet, _exports, _Formatter, _read_options, _UsageError
 
 __all__ = ["add_cli"]
 
@@ -79,6 +79,9 @@ def add_cli(subparsers: Any) -> None:
     a.add_argument("--axis-rule", choices=["max", "rms", "mean"], default="max", help="Kalibr axis rule")
     a.add_argument("--inflate", type=float, default=1.0, help="inflation factor of the Kalibr values")
     a.add_argument("--rostopic", default="/imu0", help="rostopic written to imu.yaml")
+    a.add_argument("--export", default="kalibr", metavar="LIST",
+                   help="estimator parameter files per log: kalibr, vins, openvins, matlab, gtsam, comma-separated,"
+                        " or none (default kalibr)")
     a.add_argument("--datasheet", action="append", default=[], metavar="PART|GROUP.TERM=VALUE UNIT",
                    help="datasheet figures compared in each log's report (repeatable)")
     o = p.add_argument_group("outputs and fleet summary")
@@ -107,6 +110,7 @@ def _cmd_batch(args: Any, console: Any) -> int:
         raise _UsageError(f"--limit-margin {args.limit_margin!r} must be a positive finite number")
     if args.scheduler is not None:
         check_scheduler_address(args.scheduler, name="--scheduler")
+    _exports(args)  # checked before any log is read
     figures = [] if args.no_figures else [f.strip().lower() for f in args.figures.split(",") if f.strip()]
     if console.quiet:
         progress: Any = "none"
@@ -123,7 +127,7 @@ def _cmd_batch(args: Any, console: Any) -> int:
         args.patterns, args.out, scheduler=args.scheduler, workers=args.workers, read=_read_options(args),
         statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
         axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic, datasheet=_datasheet(args.datasheet),
-        figures=figures, report=not args.no_report, limits=args.limits, limit_margin=args.limit_margin,
+        figures=figures, report=not args.no_report, exports=_exports(args), limits=args.limits, limit_margin=args.limit_margin,
         outlier_z=args.outlier_z, force=args.force_rerun, progress=progress, warmup=_warmup_option(args.warmup),
         temperature=args.temperature)
     print(fleet.summary())

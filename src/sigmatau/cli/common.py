@@ -311,6 +311,10 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
                    help="how the three axes combine into the Kalibr values (default: the largest)")
     m.add_argument("--inflate", type=float, default=1.0, help="inflation factor of the Kalibr values (default 1)")
     m.add_argument("--rostopic", default="/imu0", help="rostopic written to imu.yaml (default /imu0)")
+    m.add_argument("--export", default="kalibr", metavar="LIST",
+                   help="estimator parameter files: kalibr (imu.yaml), vins (vins_imu.yaml), openvins"
+                        " (kalibr_imu_chain.yaml), matlab (imu_params.m), gtsam (gtsam_imu_params.py),"
+                        " comma-separated, or none (default kalibr)")
     m.add_argument("--datasheet", action="append", default=[], metavar="PART|GROUP.TERM=VALUE UNIT",
                    help="datasheet figures to compare and overlay: a part (lsm6dsl, lsm6dsm, adis16448, euroc) or"
                         " a value such as 'gyro.N=4 mdps/sqrt(Hz)' (repeatable)")
@@ -391,7 +395,18 @@ def _check_out(args: argparse.Namespace, default: Path, protect: Sequence[str] =
     if printable(args.rostopic) != args.rostopic:  # it goes into imu.yaml: one line, as ROS names are
         raise _UsageError(f"--rostopic '{printable(args.rostopic)}' contains a control character (newline, tab,"
                           " escape, …); give the topic name alone")
+    _exports(args)
     return out
+
+
+def _exports(args: argparse.Namespace) -> tuple[str, ...]:
+    """``--export`` as a tuple of targets; a usage error naming the known ones."""
+    from ..report.outputs import parse_exports
+
+    try:
+        return parse_exports(args.export)
+    except ParameterError as exc:
+        raise _UsageError(f"--export: {exc}") from None
 
 
 def _check_replaceable(path: Path, what: str, force: bool, *, stdout_hint: bool = False) -> None:
@@ -494,7 +509,7 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
         display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]
     files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
-                          report=not args.no_report, protect=protect)
+                          report=not args.no_report, protect=protect, exports=_exports(args))
     _say(analysis.summary(), multiline=True)
     _say("")
     _say(f"wrote {len(files)} files to {out}/: {', '.join(f.name for f in files)}")

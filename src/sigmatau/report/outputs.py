@@ -8,7 +8,9 @@
 - ``statistics.csv`` (one row per channel, statistic and τ) and ``model.csv``
   (one row per channel and term, SI and customary units);
 - ``imu.yaml`` — the Kalibr IMU file (:func:`kalibr_yaml`), when the log has
-  gyroscope and accelerometer models;
+  gyroscope and accelerometer models, and the other estimators' parameter files
+  asked for with ``exports`` (:mod:`sigmatau.report.estimators`: VINS, OpenVINS,
+  MATLAB, GTSAM);
 - figures (:mod:`sigmatau.plots`, needs the ``plot`` extra): ``sigma_tau_<group>``
   per sensor group and ``signal_<channel>`` (time series, Welch PSD, lag plot)
   per channel, as PNG and SVG (PDF on request);
@@ -38,6 +40,7 @@ from pathlib import Path
 from typing import Any, Optional, Sequence, Union
 
 from ..errors import ParameterError, SigmaTauError, SigmaTauWarning, caller_stacklevel
+from .estimators import EXPORT_FILES, EXPORTS, export_text, parse_exports
 from .directory import (
     MANIFEST, OutputExistsError, PARTIAL_MARKER, _write_text, check_output_dir, read_manifest, remove_stale_partials,
     umask, write_directory,
@@ -47,22 +50,23 @@ from .formats import KALIBR_KEYS, csv_cell, kalibr_yaml, model_csv, printable, s
 __all__ = ["write_outputs", "check_output_dir", "read_manifest", "remove_stale_partials", "kalibr_yaml",
            "statistics_csv", "model_csv", "csv_cell", "printable", "OutputExistsError", "FIGURE_FORMATS",
            "KALIBR_KEYS", "MANIFEST", "PARTIAL_MARKER", "MAX_SIGNAL_FIGURES", "MAX_SIGMA_TAU_FIGURES",
-           "MAX_CURVES_PER_FIGURE", "umask", "write_directory"]
+           "MAX_CURVES_PER_FIGURE", "umask", "write_directory", "EXPORTS", "EXPORT_FILES", "export_text",
+           "parse_exports"]
 
 #: Figure formats :func:`write_outputs` can write.
 FIGURE_FORMATS = ("png", "svg", "pdf")
 
 
-def _kalibr_text(analysis: Any) -> Optional[str]:
-    """The imu.yaml text; None without a Kalibr entry or, with one warning, without PyYAML."""
+def _export_text(analysis: Any, target: str) -> Optional[str]:
+    """The text of one estimator file; None without an IMU model or, with one warning, without PyYAML."""
     from ..io import MissingDependencyError
 
     if analysis.kalibr is None:
         return None
     try:
-        return kalibr_yaml(analysis)
+        return export_text(analysis, target)
     except MissingDependencyError as exc:  # everything else is still useful
-        warnings.warn(f"imu.yaml not written: {exc}", SigmaTauWarning, stacklevel=caller_stacklevel())
+        warnings.warn(f"{EXPORT_FILES[target]} not written: {exc}", SigmaTauWarning, stacklevel=caller_stacklevel())
         return None
 
 
@@ -182,6 +186,7 @@ def write_outputs(
     figures: Optional[Sequence[str]] = ("png", "svg"),
     report: bool = True,
     protect: Sequence[Union[str, os.PathLike]] = (),
+    exports: Union[str, Sequence[str]] = ("kalibr",),
 ) -> list[Path]:
     """Write every output of an analysis into ``out_dir``, atomically.
 
@@ -211,6 +216,12 @@ def write_outputs(
     protect : sequence of path
         Paths that must not lie inside ``out_dir`` (the input): refused with a
         ParameterError, so ``force`` can never delete the user's data.
+    exports : sequence of str or str
+        Estimator parameter files to write when the analysis has gyro and accel
+        models (:data:`EXPORTS`: ``kalibr`` → ``imu.yaml``, ``vins`` →
+        ``vins_imu.yaml``, ``openvins`` → ``kalibr_imu_chain.yaml``, ``matlab`` →
+        ``imu_params.m``, ``gtsam`` → ``gtsam_imu_params.py``); a comma-separated
+        string is accepted. Default: Kalibr's only.
 
     Returns
     -------
@@ -223,11 +234,12 @@ def write_outputs(
             raise ParameterError(f"figure format {f!r} must be one of {', '.join(FIGURE_FORMATS)}")
     if report and fmts and "png" not in fmts:  # the report embeds the PNG files
         fmts.insert(0, "png")
-    return write_directory(out_dir, lambda folder: _write_all(analysis, folder, fmts, report), analysis.version,
-                           force=force, protect=protect)
+    targets = parse_exports(exports)
+    return write_directory(out_dir, lambda folder: _write_all(analysis, folder, fmts, report, targets),
+                           analysis.version, force=force, protect=protect)
 
 
-def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool) -> None:
+def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool, exports: Sequence[str]) -> None:
     """Every output file of ``analysis`` into the (new, empty) ``folder``."""
     figs: list[dict[str, Any]] = []
     figure_note = ""
@@ -251,9 +263,13 @@ def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool) -
     _write_text(folder / "statistics.csv", statistics_csv(analysis))
     if any(c.model is not None for c in analysis.channels):
         _write_text(folder / "model.csv", model_csv(analysis))
-    yaml_text = _kalibr_text(analysis)
-    if yaml_text is not None:
-        _write_text(folder / "imu.yaml", yaml_text)
+    yaml_text = None
+    for target in exports:
+        text = _export_text(analysis, target)
+        if text is not None:
+            _write_text(folder / EXPORT_FILES[target], text)
+        if target == "kalibr":
+            yaml_text = text
     if report:
         from .html import render
 

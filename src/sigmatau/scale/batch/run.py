@@ -15,6 +15,7 @@ from typing import Any, Callable, Mapping, Optional, Sequence, Union
 from ..._version import __version__
 from ...errors import SigmaTauWarning, caller_stacklevel
 from ...pipeline.analysis import DEFAULT_STATISTICS, json_ready
+from ...report.estimators import parse_exports
 from ...uncertainty.confidence import ONE_SIGMA
 from .cluster import (_connect, _distributed, _probe_scheduler, check_scheduler_address, local_worker_count,
                       usable_cores)
@@ -48,6 +49,7 @@ def analyze_many(
     datasheet: Union[str, Mapping[str, Any], None] = None,
     figures: Optional[Sequence[str]] = ("png",),
     report: bool = True,
+    exports: Union[str, Sequence[str]] = ("kalibr",),
     limits: Any = None,
     limit_margin: float = LIMIT_MARGIN,
     outlier_z: float = OUTLIER_Z,
@@ -93,6 +95,9 @@ def analyze_many(
         Per-log figure formats (default PNG only; None: no figures, fastest).
     report : bool
         Write each log's ``report.html``.
+    exports : sequence of str or str
+        Estimator parameter files written for each log with gyro and accel models
+        (:func:`sigmatau.outputs.write_outputs`; default Kalibr's ``imu.yaml``).
     limits : str, path or mapping, optional
         Pass/fail limits (:func:`load_limits`): a datasheet part, a file or a mapping.
     limit_margin : float
@@ -147,6 +152,7 @@ def analyze_many(
     if scheduler is not None:
         check_scheduler_address(scheduler)
     fmts = _figure_formats(figures)
+    targets = list(parse_exports(exports))
     _check_outlier_z(outlier_z)
     read_kw = _read_kwargs(read)
     analysis_kw = _analysis_kwargs(statistics, taus, confidence, model, axis_rule, inflate, rostopic, datasheet,
@@ -159,8 +165,8 @@ def analyze_many(
     out_p.mkdir(exist_ok=True)
     try:
         return _run_batch(out_p, files, created=created, client=client, scheduler=scheduler, workers=workers,
-                          read_kw=read_kw, analysis_kw=analysis_kw, fmts=fmts, report=report, lim=lim,
-                          outlier_z=outlier_z, fleet_figures=fleet_figures, force=force, progress=progress, t0=t0)
+                          read_kw=read_kw, analysis_kw=analysis_kw, fmts=fmts, report=report, exports=targets,
+                          lim=lim, outlier_z=outlier_z, fleet_figures=fleet_figures, force=force, progress=progress, t0=t0)
     except ClusterError:
         if created:  # nothing was analysed: leave no trace of the attempt
             _remove_if_ours_and_empty(out_p)
@@ -169,8 +175,8 @@ def analyze_many(
 
 def _run_batch(out_p: Path, files: list[str], *, created: bool, client: Any, scheduler: Optional[str],
                workers: Optional[int], read_kw: dict[str, Any], analysis_kw: dict[str, Any], fmts: list[str],
-               report: bool, lim: Mapping[str, Any], outlier_z: float, fleet_figures: bool, force: bool,
-               progress: Any, t0: float) -> FleetSummary:
+               report: bool, exports: list[str], lim: Mapping[str, Any], outlier_z: float, fleet_figures: bool,
+               force: bool, progress: Any, t0: float) -> FleetSummary:
     """The body of :func:`analyze_many` once its arguments are checked and ``out_p`` exists.
 
     Under the lock of ``out_p``: record the settings, take the logs done before
@@ -192,6 +198,8 @@ def _run_batch(out_p: Path, files: list[str], *, created: bool, client: Any, sch
         Per-log figure formats.
     report : bool
         Write each log's ``report.html``.
+    exports : list of str
+        Estimator parameter files per log (:func:`sigmatau.outputs.parse_exports`).
     lim : mapping
         The limits (:func:`load_limits`).
     outlier_z : float
@@ -208,7 +216,7 @@ def _run_batch(out_p: Path, files: list[str], *, created: bool, client: Any, sch
     logs_dir = out_p / LOGS_DIR
     logs_dir.mkdir(exist_ok=True)
     settings = json_ready({"version": __version__, "read": read_kw, "analysis": analysis_kw, "figures": fmts,
-                           "report": bool(report)})
+                           "report": bool(report), "exports": list(exports)})
 
     with _Lock(out_p):
         token = _check_settings(out_p, settings, force)
@@ -219,7 +227,7 @@ def _run_batch(out_p: Path, files: list[str], *, created: bool, client: Any, sch
         for rec in results.values():
             bar.update(rec)
         job = _Job(logs_dir=logs_dir, token=token, read_kw=read_kw, analysis_kw=analysis_kw, fmts=fmts,
-                   report=report, force=force)
+                   report=report, force=force, exports=tuple(exports))
         _analyse_pending(job, todo, stats, client=client, scheduler=scheduler, workers=workers, results=results,
                          journal=_Journal(out_p), bar=bar)
         ok, errors, computed, reused = _tally(files, results)
@@ -245,6 +253,8 @@ class _Job:
         Per-log figure formats.
     report, force : bool
         Write each log's ``report.html``; recompute logs already done.
+    exports : tuple of str
+        Estimator parameter files per log.
     """
 
     logs_dir: Path
@@ -254,6 +264,7 @@ class _Job:
     fmts: list[str]
     report: bool
     force: bool
+    exports: tuple[str, ...] = ("kalibr",)
 
 
 def _analyse_pending(job: _Job, todo: list[str], stats: Mapping[str, Optional[tuple[int, int]]], *, client: Any,
@@ -328,7 +339,8 @@ def _submit(cl: Any, job: _Job, todo: list[str], stats: Mapping[str, Optional[tu
     """One future per log of ``todo`` (:func:`_analyse_one`), in the order of ``todo``."""
     run = uuid.uuid4().hex[:8]
     return [cl.submit(_analyse_one, p, str(job.logs_dir.resolve()), job.read_kw, job.analysis_kw, job.fmts,
-                      bool(job.report), bool(job.force), job.token, key=_task_key(p, stats[p], job, run), pure=False)
+                      bool(job.report), bool(job.force), job.token, exports=job.exports,
+                      key=_task_key(p, stats[p], job, run), pure=False)
             for p in todo]
 
 

@@ -126,7 +126,8 @@ def _publish(staging: Path, final: Path, force: bool) -> bool:
 
 
 def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_kw: Mapping[str, Any],
-                 figures: Sequence[str], report: bool, force: bool, token: str) -> dict[str, Any]:
+                 figures: Sequence[str], report: bool, force: bool, token: str,
+                 exports: Sequence[str] = ("kalibr",)) -> dict[str, Any]:
     """One task: hash, skip when done, else read, analyse, write; a record, never an exception.
 
     Idempotent: run twice (a retry after a worker died, or two paths with the same
@@ -161,7 +162,7 @@ def _analyse_one(path: str, logs_dir: str, read_kw: Mapping[str, Any], analysis_
         warns = [f"{w.category.__name__}: {w.message}" for w in caught
                  if not w.category.__name__.startswith("Imu")]
         staging = folder / f".{name}.staging-{uuid.uuid4().hex[:8]}"
-        write_outputs(analysis, staging, figures=list(figures), report=report, protect=[path])
+        write_outputs(analysis, staging, figures=list(figures), report=report, protect=[path], exports=exports)
         rec = _record(analysis, path=path, sha256=sha, size=size, name=name, token=token, warns=warns,
                       seconds=time.perf_counter() - t0)
         _write_json(staging / _RECORD, rec)
