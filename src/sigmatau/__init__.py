@@ -14,6 +14,7 @@ from . import checks, compare, confidence, datasets, filterchain, generate, imu,
 from .compare import cornered_hat, gcodev, three_cornered_hat
 from .spectral import deadtime_correction, psd, rms_jitter, spectrum_to_sigma
 from .core.driver import register_streamed as _register_streamed
+from .core.present import register_plotter as _register_plotter
 from .core.validate import frequency_to_phase, phase_to_frequency
 from ._version import __version__
 from .stats.allan import adev, mdev, oadev, ostdev, stdev, tdev
@@ -73,6 +74,22 @@ def _dask_record(data: object) -> object:
 
 # Dask objects reach the statistics as streamed records (core.driver.StreamedSeries).
 _register_streamed(_is_dask, _dask_record)
+
+
+def _plotter(name: str):  # type: ignore[no-untyped-def]
+    # The figure layer (matplotlib) loads on the first plot() call, not at import.
+    def draw(obj: object, ax: object = None, **kw: object) -> object:
+        from .report import notebook
+
+        return getattr(notebook, name)(obj, ax, **kw)
+
+    return draw
+
+
+# plot() of the result types (core.present) draws through the report layer's notebook module.
+for _kind, _name in (("stability", "plot_result"), ("model", "plot_model"), ("channel", "plot_channel"),
+                     ("log", "plot_log")):
+    _register_plotter(_kind, _plotter(_name))
 
 # Modules that sat at the top of the package before it was split into layers keep their
 # dotted paths: ``import sigmatau.theo`` and ``sigmatau.result.StabilityResult`` still work,

@@ -14,6 +14,7 @@ __all__ = [
     "SigmaTauError",
     "ParameterError",
     "DataError",
+    "MissingDependencyError",
     "SigmaTauWarning",
     "RangeWarning",
 ]
@@ -29,6 +30,10 @@ class ParameterError(SigmaTauError, ValueError):
 
 class DataError(SigmaTauError, ValueError):
     """The data cannot be analysed (NaN, empty, too short, wrong shape...)."""
+
+
+class MissingDependencyError(SigmaTauError, ImportError):
+    """A feature needs an optional package that is not installed (the message names the extra)."""
 
 
 class SigmaTauWarning(UserWarning):

@@ -10,6 +10,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from .present import data_frame, html_table, noise_name, plot
+
 __all__ = ["StabilityResult", "json_ready"]
 
 _ARRAY_FIELDS = (
@@ -135,14 +137,72 @@ class StabilityResult:
             rows.append(row)
         widths = [max(len(r[j]) for r in rows) for j in range(len(cols))]
         lines = ["  ".join(cell.rjust(w) for cell, w in zip(r, widths)) for r in rows]
+        return "\n".join([self._title(), *lines])
+
+    def _title(self) -> str:
+        """The statistic, data type, rate, N, missing samples, bias and confidence in one line."""
         title = f"{self.statistic}  ({self.data_type} data, rate {self.rate:g} Hz, N = {self.n_points} phase points"
         if self.n_missing:
             title += f", {self.n_missing} samples missing"
         title += f", bias: {self.bias}"
         if self.confidence is not None:
             title += f", {100 * self.confidence:.1f} % interval"
-        title += ")"
-        return "\n".join([title, *lines])
+        return title + ")"
+
+    def _column(self, name: str) -> list[Any]:
+        """A per-τ column as Python values, NaN where the field is absent."""
+        value = getattr(self, name)
+        return [float("nan")] * len(self) if value is None else value.tolist()
+
+    def _repr_html_(self) -> str:
+        """The table of :meth:`to_table` as HTML, for notebooks."""
+        rows = zip(self.taus.tolist(), self.m.tolist(), self.n.tolist(), self._column("alpha"),
+                   [noise_name(a) for a in self._column("alpha")], self._column("ci_low"), self.dev.tolist(),
+                   self._column("ci_high"), self._column("edf"))
+        return html_table(["τ [s]", "m", "n", "α", "noise", "min dev", "dev", "max dev", "EDF"], rows,
+                          caption=self._title())
+
+    def to_pandas(self) -> Any:
+        """A pandas DataFrame, one row per τ (tidy: a ``statistic`` column, so results concatenate).
+
+        Columns ``statistic``, ``tau_s``, ``m``, ``n``, ``alpha``, ``noise`` (WPM … RRFM),
+        ``dev``, ``dev_low``, ``dev_high``, ``edf`` and ``var``; NaN where a value is
+        absent. ``frame.attrs`` holds ``rate_hz``, ``data_type``, ``n_points``, ``n_missing``,
+        ``bias`` and ``confidence``. Needs pandas (extra ``pandas``).
+
+        Examples
+        --------
+        >>> import numpy as np, sigmatau
+        >>> r = sigmatau.oadev(np.random.default_rng(0).standard_normal(1000), m=[1, 2, 4])
+        >>> frame = r.to_pandas()  # doctest: +SKIP
+        >>> list(frame.columns)[:4]  # doctest: +SKIP
+        ['statistic', 'tau_s', 'm', 'n']
+        """
+        alpha = self._column("alpha")
+        return data_frame({
+            "statistic": [self.statistic] * len(self), "tau_s": self.taus.tolist(), "m": self.m.tolist(),
+            "n": self.n.tolist(), "alpha": alpha, "noise": [noise_name(a) for a in alpha],
+            "dev": self.dev.tolist(), "dev_low": self._column("ci_low"), "dev_high": self._column("ci_high"),
+            "edf": self._column("edf"), "var": self.var.tolist(),
+        }, attrs={"rate_hz": self.rate, "data_type": self.data_type, "n_points": self.n_points,
+                  "n_missing": self.n_missing, "bias": self.bias, "confidence": self.confidence})
+
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Draw σ(τ) with its interval band on log–log axes (matplotlib, extra ``plot``).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure's when None.
+        **kw
+            ``label`` (default the statistic's name), ``color``, ``unit`` (for the y label),
+            ``band`` (draw the interval, default True) and other keywords of ``Axes.plot``.
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return plot("stability", self, ax=ax, **kw)
 
     def to_csv(self) -> str:
         """CSV text with a header row and one row per τ."""

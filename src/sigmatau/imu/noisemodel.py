@@ -19,6 +19,7 @@ from typing import Any, Mapping, Optional, Sequence, Union
 
 import numpy as np
 
+from ..core.present import data_frame, html_table, plot
 from ..core.result import StabilityResult
 from ..errors import ParameterError
 from .answers import _draw_intervals, _flat_range, _minimum_draws, _model_minimum, angle_error
@@ -279,6 +280,69 @@ class NoiseModel:
     def __repr__(self) -> str:
         vals = ", ".join(f"{t}={getattr(self, t).format(3, unit=False)}" for t in TERMS)
         return f"NoiseModel({self.kind}, {self.unit}, {self.rate:g} Hz: {vals})"
+
+    def _repr_html_(self) -> str:
+        """The table of :meth:`to_table` as HTML, for notebooks."""
+        rows = []
+        for t in TERMS:
+            p = getattr(self, t)
+            ro = self.readoff.get(t)
+            reg = self.regions.get(t)
+            region = f"{reg.tau_low:.3g}–{reg.tau_high:.3g} s" if reg is not None and reg.resolved else "—"
+            rows.append([t, p.format(), _short(p.si()), "; ".join(_short(c) for c in p.customary()),
+                         ro.format() if ro is not None else "—", region])
+        sensor = "gyroscope" if self.kind == "gyro" else "accelerometer"
+        caption = (f"IMU noise model: {sensor}, {pretty(self.unit)} at {self.rate:g} Hz,"
+                   f" {format_duration(self.duration)}; {100 * self.confidence:.1f} % intervals;"
+                   f" fit terms: {', '.join(self.fit_terms) or 'none'}")
+        notes = [f"[{f.code}{' ' + f.term if f.term else ''}] {f.message}" for f in self.flags]
+        if self.gauss_markov is not None:
+            notes.insert(0, f"Gauss–Markov term: {self.gauss_markov.format()}")
+        return html_table(["term", "value", "SI", "customary", "read-off", "read-off region"], rows,
+                          caption=caption, notes=notes)
+
+    def to_pandas(self) -> Any:
+        """A pandas DataFrame, one row per term (Q, N, B, K, R), in the input unit and in SI.
+
+        Columns ``term``, ``value``, ``low``, ``high``, ``unit``, ``value_si``, ``low_si``,
+        ``high_si``, ``unit_si``, ``resolved`` (False: only ``high`` is an upper bound),
+        ``method`` (fit or read-off), ``readoff`` and ``readoff_unit``; ``frame.attrs``
+        holds ``kind``, ``unit``, ``rate_hz``, ``n_samples``, ``duration_s``, ``confidence``
+        and ``fit_terms``. Needs pandas (extra ``pandas``).
+        """
+        cols: dict[str, list[Any]] = {k: [] for k in ("term", "value", "low", "high", "unit", "value_si", "low_si",
+                                                      "high_si", "unit_si", "resolved", "method", "readoff",
+                                                      "readoff_unit")}
+        for t in TERMS:
+            p = getattr(self, t)
+            si = p.si()
+            ro = self.readoff.get(t)
+            for key, value in (("term", t), ("value", p.value), ("low", p.low), ("high", p.high),
+                               ("unit", p.unit), ("value_si", si.value), ("low_si", si.low), ("high_si", si.high),
+                               ("unit_si", si.unit), ("resolved", bool(p.resolved)), ("method", p.method),
+                               ("readoff", ro.value if ro is not None else float("nan")),
+                               ("readoff_unit", ro.unit if ro is not None else "")):
+                cols[key].append(value)
+        return data_frame(cols, attrs={"kind": self.kind, "unit": self.unit, "rate_hz": self.rate,
+                                       "n_samples": self.n_samples, "duration_s": self.duration,
+                                       "confidence": self.confidence, "fit_terms": list(self.fit_terms)})
+
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Draw the OADEV curve with its intervals, the fitted model and each term (matplotlib).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure's when None.
+        **kw
+            ``label`` (default: the sensor kind), ``color``, ``terms`` (draw each term's
+            line, default True).
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return plot("model", self, ax=ax, **kw)
 
 
 def optimal_averaging(model: NoiseModel, *, draws: int = 400) -> OptimalAveraging:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
-from ..errors import DataError, SigmaTauError, SigmaTauWarning
+from ..errors import DataError, MissingDependencyError, SigmaTauWarning
 
 __all__ = [
     "FormatError",
@@ -25,10 +25,6 @@ class FormatError(DataError):
 
 class InputNotFoundError(DataError, FileNotFoundError):
     """The input path does not exist (also a :class:`FileNotFoundError`)."""
-
-
-class MissingDependencyError(SigmaTauError, ImportError):
-    """Reading this format needs an optional package that is not installed."""
 
 
 class InputWarning(SigmaTauWarning):

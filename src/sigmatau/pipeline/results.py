@@ -11,9 +11,9 @@ from dataclasses import dataclass
 from typing import Any, Mapping, Optional
 
 from .._version import __version__
-from ..core.result import json_ready
+from ..core.present import concat_frames, html_table, plot
+from ..core.result import StabilityResult, json_ready
 from ..errors import ParameterError
-from ..core.result import StabilityResult
 
 __all__ = [
     "IMU_GROUPS", "TERMS", "SI_TERM_UNITS", "ChannelAnalysis", "LogAnalysis", "format_parameter",
@@ -95,6 +95,58 @@ class ChannelAnalysis:
             "seconds": self.seconds,
         })
 
+    def _stat_rows(self) -> list[list[Any]]:
+        """One row per statistic: name, τ range, deviation range, noise types seen; then the skipped ones."""
+        from ..core.present import noise_name
+
+        rows: list[list[Any]] = []
+        for stat, r in self.results.items():
+            types = sorted({noise_name(a) for a in (r.alpha.tolist() if r.alpha is not None else [])} - {""})
+            rows.append([stat, len(r), f"{r.taus[0]:.3g} – {r.taus[-1]:.3g}" if len(r) else "—",
+                         f"{r.dev[0]:.4g} – {r.dev[-1]:.4g}" if len(r) else "—", ", ".join(types) or "—"])
+        rows += [[stat, 0, "—", "—", f"not computed: {why}"] for stat, why in self.skipped.items()]
+        return rows
+
+    def _repr_html_(self) -> str:
+        """The channel's statistics (one row each) and its IMU model, as HTML for notebooks."""
+        caption = f"{self.name}: {self.group}, unit {self.unit or '?'}, {self.n_samples:,} samples"
+        table = html_table(["statistic", "τ points", "τ [s]", "deviation", "noise types"], self._stat_rows(),
+                           caption=caption, notes=[f"no IMU model: {self.model_note}"] if self.model_note else ())
+        return table + (self.model._repr_html_() if self.model is not None else "")
+
+    def to_pandas(self) -> Any:
+        """Every statistic of the channel in one tidy DataFrame (the rows of each
+        :meth:`StabilityResult.to_pandas`, with ``channel``, ``group`` and ``unit`` columns).
+
+        The deviations of TDEV/TTOT (time error) are in the phase unit; ``frame.attrs`` holds
+        the channel, group, unit and sample count. Needs pandas (extra ``pandas``).
+        """
+        frames = []
+        for r in self.results.values():
+            f = r.to_pandas()
+            f.insert(0, "unit", self.unit)
+            f.insert(0, "group", self.group)
+            f.insert(0, "channel", self.name)
+            frames.append(f)
+        return concat_frames(frames, attrs={"channel": self.name, "group": self.group, "unit": self.unit,
+                                            "n_samples": self.n_samples})
+
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Draw the channel's statistics (interval bands) and its fitted model on one log–log axes.
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure's when None.
+        **kw
+            ``statistics``: the names to draw (default all computed).
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return plot("channel", self, ax=ax, **kw)
+
 
 @dataclass(frozen=True)
 class LogAnalysis:
@@ -162,6 +214,70 @@ class LogAnalysis:
             "kalibr_note": self.kalibr_note,
             "seconds": self.seconds,
         })
+
+    def _repr_html_(self) -> str:
+        """One row per channel (statistics, and the model's N, B, K in SI), the Kalibr values and the
+        notes and warnings, as HTML for notebooks."""
+        log = self.log
+        rows = []
+        for ch in self.channels:
+            terms = ["—"] * 3
+            if ch.model is not None:
+                terms = [format_parameter(getattr(ch.model, t).si()) for t in ("N", "B", "K")]
+            rows.append([ch.name, ch.group, ch.unit or "?", ", ".join(ch.results) or "none", *terms])
+        notes = [f"note: {n}" for n in self.notes]
+        if self.kalibr is not None:
+            k = self.kalibr
+            notes.append(f"Kalibr ({k['axis_rule']}): " + ", ".join(
+                f"{key} {k[key]:.4g}" for key in ("gyroscope_noise_density", "gyroscope_random_walk",
+                                                  "accelerometer_noise_density", "accelerometer_random_walk")))
+        elif self.kalibr_note:
+            notes.append(f"no Kalibr entry: {self.kalibr_note}")
+        notes += [f"warning: {w}" for w in self.warnings]
+        caption = (f"sigmatau {self.version}: {log.source.path} ({log.source.format}), {len(log.channels)} channel(s)"
+                   f" × {len(log):,} samples at {log.rate:.6g} Hz")
+        return html_table(["channel", "group", "unit", "statistics", "N (SI)", "B (SI)", "K (SI)"], rows,
+                          caption=caption, notes=notes)
+
+    def to_pandas(self, what: str = "statistics") -> Any:
+        """The analysis as one tidy DataFrame: ``"statistics"`` (every channel's
+        :meth:`ChannelAnalysis.to_pandas`, stacked) or ``"model"`` (every IMU model's
+        :meth:`~sigmatau.imu.NoiseModel.to_pandas` with a ``channel`` column).
+
+        ``frame.attrs`` holds the input path, its SHA-256, the rate and the sigmatau version.
+        Needs pandas (extra ``pandas``).
+        """
+        if what not in ("statistics", "model"):
+            raise ParameterError(f"what={what!r} must be 'statistics' or 'model'")
+        frames = []
+        for ch in self.channels:
+            if what == "statistics":
+                frames.append(ch.to_pandas())
+            elif ch.model is not None:
+                f = ch.model.to_pandas()
+                f.insert(0, "group", ch.group)
+                f.insert(0, "channel", ch.name)
+                frames.append(f)
+        return concat_frames(frames, attrs={"input": self.log.source.path, "sha256": self.log.source.sha256,
+                                            "rate_hz": self.log.rate, "version": self.version})
+
+    def plot(self, ax: Any = None, **kw: Any) -> Any:
+        """Draw one statistic of every channel of a group on one log–log axes (matplotlib).
+
+        Parameters
+        ----------
+        ax : matplotlib.axes.Axes, optional
+            Axes to draw on; a new figure's when None.
+        **kw
+            ``group`` (default the first group with results), ``statistic`` (default the
+            first computed, OADEV by default), ``model`` (draw each channel's fitted model,
+            default True).
+
+        Returns
+        -------
+        matplotlib.axes.Axes
+        """
+        return plot("log", self, ax=ax, **kw)
 
     def summary(self) -> str:
         """Terminal summary: data checks, then per channel the model (SI and customary units) and flags."""

@@ -6,16 +6,12 @@ decision and fit modules can share them without importing each other.
 
 from __future__ import annotations
 
-from typing import Literal, Mapping
+from typing import Literal
 
 import numpy as np
 
+from ..core.present import NOISE_NAMES
 from ..errors import DataError, ParameterError
-
-#: Short names of the power-law noise types, keyed by the frequency exponent α.
-NOISE_NAMES: Mapping[int, str] = {
-    2: "WPM", 1: "FPM", 0: "WFM", -1: "FFM", -2: "RWFM", -3: "FWFM", -4: "RRFM",
-}
 
 Family = Literal["allan", "modified", "hadamard", "total", "theo"]
 
