@@ -174,9 +174,9 @@ class StabilityResult:
         --------
         >>> import numpy as np, sigmatau
         >>> r = sigmatau.oadev(np.random.default_rng(0).standard_normal(1000), m=[1, 2, 4])
-        >>> frame = r.to_pandas()  # doctest: +SKIP
-        >>> list(frame.columns)[:4]  # doctest: +SKIP
-        ['statistic', 'tau_s', 'm', 'n']
+        >>> frame = r.to_pandas()
+        >>> list(frame.columns)[:4], frame["m"].tolist()
+        (['statistic', 'tau_s', 'm', 'n'], [1, 2, 4])
         """
         alpha = self._column("alpha")
         return data_frame({
