@@ -3,7 +3,11 @@
 Follows the decision rules of :func:`sigmatau.noiseid.identify` (in
 :mod:`sigmatau.uncertainty.noiseid`) on the decimated or averaged series,
 streamed twice per factor; :func:`_attach` hands the identified noise to
-:func:`sigmatau.uncertainty.attach.attach`.
+:func:`sigmatau.uncertainty.attach.attach`. With missing samples the rules are
+the in-memory gap rules: a decimated point or block mean that reads a gap is
+missing (NaN), the lag-1 autocorrelation uses the points present and the pairs
+of neighbours both present (:func:`_lag1_gaps`), B1 the block means present
+(:func:`_b1_streamed` when they are too many to hold).
 """
 
 from __future__ import annotations
@@ -29,15 +33,11 @@ def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: in
     ``num = Σ (z_k - z̄)(z_{k+1} - z̄)`` (z̄ the mean of that difference series),
     from two passes: means first, then the centred sums.
     """
-    def new_values(ext: np.ndarray, had: int, d: int) -> np.ndarray:
-        diff = np.diff(ext, d) if d else ext
-        return diff[max(0, had - d) :]
-
     sums: list[list[float]] = [[] for _ in range(dmax + 1)]
     had = 0
     for ext in _with_history(batches(), dmax):
         for d in range(dmax + 1):
-            sums[d].append(float(np.add.reduce(new_values(ext, had, d))))
+            sums[d].append(float(np.add.reduce(_new_values(ext, had, d))))
         had = min(dmax, ext.size)
     means = [math.fsum(sums[d]) / (n - d) for d in range(dmax + 1)]
     den: list[list[float]] = [[] for _ in range(dmax + 1)]
@@ -46,7 +46,7 @@ def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: in
     had = 0
     for ext in _with_history(batches(), dmax):
         for d in range(dmax + 1):
-            zc = new_values(ext, had, d) - means[d]
+            zc = _new_values(ext, had, d) - means[d]
             if zc.size == 0:
                 continue
             den[d].append(float(np.einsum("i,i->", zc, zc)))
@@ -58,7 +58,88 @@ def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: in
     return [math.fsum(v) for v in den], [math.fsum(v) for v in num]
 
 
-def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int):
+def _present_sums(batches: Callable[[], Iterator[np.ndarray]], dmax: int) -> list[tuple[int, int, float]]:
+    """First pass of the lag-1 sums with gaps: per difference order d = 0 … dmax, the points
+    present (not NaN), the pairs of neighbours both present, and the sum of the points present."""
+    sums: list[list[float]] = [[] for _ in range(dmax + 1)]
+    present = [0] * (dmax + 1)
+    pairs = [0] * (dmax + 1)
+    last_ok = [False] * (dmax + 1)
+    had = 0
+    for ext in _with_history(batches(), dmax):
+        for d in range(dmax + 1):
+            z = _new_values(ext, had, d)
+            if z.size == 0:
+                continue
+            ok = ~np.isnan(z)
+            sums[d].append(float(np.add.reduce(z[ok])))
+            present[d] += int(np.count_nonzero(ok))
+            pairs[d] += int(np.count_nonzero(ok[:-1] & ok[1:])) + int(last_ok[d] and ok[0])
+            last_ok[d] = bool(ok[-1])
+        had = min(dmax, ext.size)
+    return [(present[d], pairs[d], math.fsum(sums[d])) for d in range(dmax + 1)]
+
+
+def _centred_sums(batches: Callable[[], Iterator[np.ndarray]], dmax: int,
+                  means: list[float]) -> tuple[list[float], list[float]]:
+    """Second pass: ``Σ zc²`` and ``Σ zc_k·zc_{k+1}`` of the d-th differences centred on the mean
+    of the points present, a missing point taken as 0 (so a pair with one adds nothing)."""
+    den: list[list[float]] = [[] for _ in range(dmax + 1)]
+    num: list[list[float]] = [[] for _ in range(dmax + 1)]
+    last = [0.0] * (dmax + 1)
+    had = 0
+    for ext in _with_history(batches(), dmax):
+        for d in range(dmax + 1):
+            z = _new_values(ext, had, d)
+            if z.size == 0:
+                continue
+            zc = np.where(np.isnan(z), 0.0, z - means[d])
+            den[d].append(float(np.einsum("i,i->", zc, zc)))
+            num[d].append(float(np.einsum("i,i->", zc[:-1], zc[1:])))
+            num[d].append(last[d] * float(zc[0]))
+            last[d] = float(zc[-1])
+        had = min(dmax, ext.size)
+    return [math.fsum(v) for v in den], [math.fsum(v) for v in num]
+
+
+def _lag1_gaps(batches: Callable[[], Iterator[np.ndarray]], m: int, dtype: str, dmax: int):
+    """α and α̂ of a streamed series holding NaN (missing points), by the in-memory gap rules:
+    the mean and ``Σ zc²`` over the n points present, ``Σ zc_k·zc_{k+1}`` over the pairs both
+    present, ``r1 = num/den·(n-1)/pairs`` (:func:`sigmatau.noiseid.lag1_acf_noise_id`)."""
+    from ...uncertainty import noiseid
+
+    first = _present_sums(batches, dmax)
+    if first[0][0] < noiseid.LAG1_MIN_POINTS:
+        raise noiseid.InsufficientDataError(
+            f"lag-1 noise identification needs at least {noiseid.LAG1_MIN_POINTS} points at m={m},"
+            f" got {first[0][0]} outside the gaps")
+    means = [total / n if n else 0.0 for n, _, total in first]
+    den, num = _centred_sums(batches, dmax, means)
+    theta = 1 if dtype == "phase" else 0
+    d = 0
+    while True:
+        n, pairs = first[d][0], first[d][1]
+        if n < 2 or den[d] == 0.0:
+            raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
+        if pairs == 0:
+            raise noiseid.InsufficientDataError("no two neighbouring points are both present at this averaging factor")
+        r1 = num[d] / den[d] * (n - 1) / pairs
+        if r1 <= -1.0:
+            raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
+        delta = r1 / (1.0 + r1)
+        if delta < 0.25 or d >= dmax:
+            break
+        d += 1
+    return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
+
+
+def _new_values(ext: np.ndarray, had: int, d: int) -> np.ndarray:
+    """The d-th differences of a batch preceded by ``had`` values of history, less those already seen."""
+    diff = np.diff(ext, d) if d else ext
+    return diff[max(0, had - d) :]
+
+
+def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int, gaps: bool = False):
     """α and α̂ by :func:`sigmatau.noiseid.lag1_acf_noise_id` on the decimated or averaged series."""
     from ...uncertainty import noiseid
 
@@ -71,8 +152,13 @@ def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int):
         raise noiseid.InsufficientDataError(f"lag-1 noise identification needs at least 30 points at m={m}, got {nz}")
     if nz <= L:  # small enough: the in-memory routine itself
         z = np.concatenate(list(batches()))
+        if gaps and np.count_nonzero(~np.isnan(z)) < noiseid.LAG1_MIN_POINTS:
+            # (checked here: the routine would first refuse a series with no point present at all)
+            raise noiseid.InsufficientDataError(f"lag-1 noise identification needs at least 30 points at m={m}")
         r = noiseid.lag1_acf_noise_id(z, 1, data_type=dtype, dmax=dmax)
         return r.alpha, r.alpha_estimate
+    if gaps:
+        return _lag1_gaps(batches, m, dtype, dmax)
     den, num = _lag1_streamed(batches, nz, dmax)
     theta = 1 if dtype == "phase" else 0
     d = 0
@@ -89,12 +175,46 @@ def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int):
     return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
 
 
-def _b1(freq: object, m: int, hadamard: bool, L: int, n_expected: Optional[int] = None):
+def _b1_streamed(batches: Callable[[], Iterator[np.ndarray]], m: int) -> tuple[float, int]:
+    """The observed B1 ratio and Nb from block means streamed twice (some missing: NaN), as
+    :func:`sigmatau.noiseid.b1_observed`: the variance of the means present over the Allan
+    variance of the neighbouring pairs present."""
+    from ...uncertainty.noiseid import InsufficientDataError
+
+    sums: list[float] = []
+    sq_diff: list[float] = []
+    nb = n_diff = 0
+    for ext in _with_history(batches(), 1):
+        dif = np.diff(ext)
+        dif = dif[~np.isnan(dif)]
+        sq_diff.append(float(np.einsum("i,i->", dif, dif)))
+        n_diff += dif.size
+        new = ext if len(sums) == 0 else ext[1:]  # the history value was counted with its own batch
+        new = new[~np.isnan(new)]
+        sums.append(float(np.add.reduce(new)))
+        nb += new.size
+    if nb < 2 or n_diff == 0:
+        raise InsufficientDataError(f"the B1 ratio needs at least 2 averages (and a pair of neighbours) at m={m},"
+                                    f" got {nb} outside the gaps")
+    mean = math.fsum(sums) / nb
+    squares: list[float] = []
+    for b in batches():
+        c = b[~np.isnan(b)] - mean
+        squares.append(float(np.einsum("i,i->", c, c)))
+    avar = math.fsum(sq_diff) / (2.0 * n_diff)
+    if avar == 0.0:
+        raise DataError(f"the Allan variance is zero at m={m}; the B1 ratio is undefined")
+    return math.fsum(squares) / (nb - 1) / avar, nb
+
+
+def _b1(freq: object, m: int, hadamard: bool, L: int, n_expected: Optional[int] = None, gaps: bool = False):
     """:func:`sigmatau.noiseid.b1_noise_id` from streamed block means of the frequency series."""
     from ...uncertainty.noiseid import InsufficientDataError, b1_classify, b1_observed
 
     def obs(series: object) -> tuple[float, int]:
         count = series.n // m  # type: ignore[attr-defined]
+        if gaps and count > L:  # many blocks, most of them missing: streamed, not held
+            return _b1_streamed(lambda: _block_means(series, m, count, L), m)
         means = np.concatenate([np.empty(0)] + list(_block_means(series, m, count, L)))
         if means.size < 2:
             raise InsufficientDataError(f"the B1 ratio needs at least 2 averages at m={m}, got {means.size}")
@@ -136,7 +256,7 @@ def _rn(src: _Series, m: int, dtype: str) -> float:
 
 
 def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
-              n_terms: Optional[np.ndarray] = None) -> tuple[np.ndarray, np.ndarray]:
+              n_terms: Optional[np.ndarray] = None, gaps: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """``(alpha, alpha_estimate)`` per factor, following :func:`sigmatau.noiseid.identify`."""
     from ...uncertainty import noiseid
 
@@ -154,7 +274,7 @@ def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
     for i, m in enumerate(m_list):
         if src.n // m >= noiseid.LAG1_MIN_POINTS:
             try:
-                alpha[i], est[i] = _lag1(raw, m, dtype, dmax, L)
+                alpha[i], est[i] = _lag1(raw, m, dtype, dmax, L, gaps)
             except noiseid.InsufficientDataError:
                 pass
             else:
@@ -165,7 +285,7 @@ def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
             continue
         try:
             a, e, ambiguous = _b1(freq, m, fam == "hadamard", L,
-                                  None if n_terms is None else int(n_terms[i]))
+                                  None if n_terms is None else int(n_terms[i]), gaps)
         except DataError:
             method.append("carried")
             continue
@@ -199,8 +319,9 @@ def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
 
 def _attach(result: StabilityResult, src: _Series, data_type: str, *, alpha: Optional[int],
             confidence: float, ci: Optional[str], id_factors: Optional[np.ndarray] = None,
-            identified: Optional[tuple[np.ndarray, np.ndarray]] = None) -> StabilityResult:
-    """:func:`sigmatau.uncertainty.attach.attach` with the noise identified chunk-wise."""
+            identified: Optional[tuple[np.ndarray, np.ndarray]] = None, gaps: bool = False) -> StabilityResult:
+    """:func:`sigmatau.uncertainty.attach.attach` with the noise identified chunk-wise
+    (``gaps``: the record holds missing samples, NaN, and the in-memory gap rules apply)."""
     if ci is None or len(result) == 0 or alpha is not None or identified is not None:
         # The data are not looked at on these paths.
         return attach(result, np.empty(0), data_type, alpha=alpha, confidence=confidence, ci=ci,
@@ -208,7 +329,8 @@ def _attach(result: StabilityResult, src: _Series, data_type: str, *, alpha: Opt
     factors = result.m if id_factors is None else id_factors
     try:
         same = np.array_equal(factors, result.m)
-        ident = _identify(src, factors, data_type, result.statistic, n_terms=result.n if same else None)
+        ident = _identify(src, factors, data_type, result.statistic, n_terms=result.n if same else None,
+                          gaps=gaps)
     except DataError as exc:
         nan = np.full(len(result), np.nan)
         out = attach(result, np.empty(0), data_type, alpha=None, confidence=confidence, ci=ci, identified=(nan, nan))

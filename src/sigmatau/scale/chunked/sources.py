@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Callable, Optional, Union
 
 import numpy as np
 
-from ...core.driver import Statistic
+from ...core.driver import Statistic, drop_empty_factors
 from ...core.result import StabilityResult
 from ...core.taus import select_m
 from ...core.validate import check_data_type, check_rate, unscale_variance
@@ -27,9 +28,9 @@ from ...errors import DataError, ParameterError
 from ...stats.engine import id_factors
 from ...uncertainty.attach import check_options
 from ...uncertainty.confidence import ONE_SIGMA
-from .kernels import _KERNELS
+from .kernels import _gap_variance, _KERNELS, _plain_variance
 from .noiseid import _attach
-from .streams import _Centred, _Detrended, _Integrated, _pairwise_sum
+from .streams import _Gaps, _pairwise_sum
 
 
 #: Samples per chunk by default (512 KiB of float64: the ~30 arrays of a pass stay near the
@@ -94,6 +95,8 @@ class ChunkedSeries:
         self._scan: Optional[float] = None
         #: Largest |sample|, found by the validating pass (:func:`_scan`).
         self._peak: Optional[float] = None
+        #: Missing (NaN) samples and the first and last present index, from the same pass.
+        self._gaps: Optional[_Gaps] = None
 
     def __len__(self) -> int:
         return self.n
@@ -116,7 +119,7 @@ class ChunkedSeries:
         """The same series read in pieces of ``chunk_size`` samples."""
         other = ChunkedSeries(self._read, self.n, chunk_size=chunk_size, name=self.name,
                               read_strided=self._read_strided, close=self._close)
-        other._scan, other._peak = self._scan, self._peak
+        other._scan, other._peak, other._gaps = self._scan, self._peak, self._gaps
         return other
 
     # The StreamedSeries protocol (sigmatau.core.driver): how the statistics reach this record.
@@ -380,35 +383,74 @@ def adapt_dask(data: object) -> _DaskRecord:
 # ------------------------------------------------------- validation and scaling
 
 
+class _Validation:
+    """The validating pass's view of each chunk: infinite values, NaN (gaps), the peak.
+
+    :meth:`visit` returns the chunk with NaN taken as 0, so the pass's pairwise sum is
+    ``np.nansum`` (and the plain sum, bit for bit, when nothing is missing).
+    """
+
+    def __init__(self) -> None:
+        self.peak = 0.0
+        self.missing = 0
+        self.infinite = 0
+        self.first_inf: Optional[tuple[int, float]] = None
+        self.first: Optional[int] = None
+        self.last = -1
+
+    def visit(self, start: int, v: np.ndarray) -> np.ndarray:
+        finite = np.isfinite(v)
+        if finite.all():
+            if v.size:
+                # The peak costs one more reduction of a chunk already in memory: no extra read.
+                self.peak = max(self.peak, float(np.max(np.abs(v))))
+                self._present(start, start + v.size - 1)
+            return v
+        nan = np.isnan(v)
+        inf = ~finite & ~nan
+        if inf.any() and self.first_inf is None:
+            i = int(np.flatnonzero(inf)[0])
+            self.first_inf = (start + i, float(v[i]))
+        self.infinite += int(np.count_nonzero(inf))
+        self.missing += int(np.count_nonzero(nan))
+        present = np.flatnonzero(~nan)
+        if present.size:
+            self._present(start + int(present[0]), start + int(present[-1]))
+            if finite.any():
+                self.peak = max(self.peak, float(np.max(np.abs(v[finite]))))
+        return np.where(nan, 0.0, v)
+
+    def _present(self, first: int, last: int) -> None:
+        if self.first is None:
+            self.first = first
+        self.last = last
+
+    def gaps(self, name: str, n: int) -> Optional[_Gaps]:
+        """The missing samples found (None when none is), after the in-memory path's errors
+        (:func:`sigmatau.core.validate.as_series` with gaps): an infinite value, nothing present."""
+        if self.first_inf is not None:
+            i, value = self.first_inf
+            raise DataError(f"{name} holds {self.infinite} infinite value(s) (first at index {i}: {value});"
+                            " a missing sample is NaN, an infinite one is an error in the data")
+        if self.first is None:
+            raise DataError(f"{name}: every one of its {n} samples is missing (NaN)")
+        return _Gaps(self.missing, self.first, self.last) if self.missing else None
+
+
 def _scan(src: ChunkedSeries) -> float:
-    """Validate every sample (finite) and return their sum in numpy's pairwise order."""
+    """Validate every sample (finite or NaN, a gap) and return their sum (NaN as 0) in numpy's pairwise order."""
     if src._scan is not None:
         return src._scan
     if src.n == 0:
         raise DataError(f"{src.name} is empty")
-    bad: list[tuple[int, float]] = []
-    count = [0]
-    peak = [0.0]
+    seen = _Validation()
 
-    def visit(start: int, v: np.ndarray) -> None:
-        finite = np.isfinite(v)
-        if v.size and finite.all():
-            # The peak costs one more reduction of a chunk already in memory: no extra read.
-            peak[0] = max(peak[0], float(np.max(np.abs(v))))
-        if not finite.all():
-            idx = np.flatnonzero(~finite)
-            count[0] += idx.size
-            if not bad:
-                bad.append((start + int(idx[0]), float(v[idx[0]])))
+    def read(a: int, b: int) -> np.ndarray:
+        return seen.visit(a, src.read(a, b))
 
-    total = _pairwise_sum(src.read, 0, src.n, src.chunk_size, visit)
-    if bad:
-        i, value = bad[0]
-        raise DataError(
-            f"{src.name} holds {count[0]} non-finite value(s) (first at index {i}: {value}); the chunked path does"
-            " not take missing samples (NaN gaps) yet: load the record in memory, or fill them first"
-        )
-    src._scan, src._peak = total, peak[0]
+    total = _pairwise_sum(read, 0, src.n, src.chunk_size)
+    src._gaps = seen.gaps(src.name, src.n)
+    src._scan, src._peak = total, seen.peak
     return total
 
 
@@ -437,8 +479,15 @@ def _scaled(src: ChunkedSeries) -> tuple[ChunkedSeries, int]:
     # A power of two commutes with every rounding of the pairwise sum unless that sum
     # overflowed (data near 1e308): then it is summed again from the scaled chunks.
     scaled_total = math.ldexp(total, -k) if math.isfinite(total) else math.inf
-    out._scan = scaled_total if math.isfinite(scaled_total) else _pairwise_sum(out.read, 0, out.n, out.chunk_size)
+    if not math.isfinite(scaled_total):
+        def filled(a: int, b: int) -> np.ndarray:  # NaN (gaps) as 0, as in the validating pass
+            v = out.read(a, b)
+            return np.where(np.isnan(v), 0.0, v) if src._gaps is not None else v
+
+        scaled_total = _pairwise_sum(filled, 0, out.n, out.chunk_size)
+    out._scan = scaled_total
     out._peak = math.ldexp(peak, -k)
+    out._gaps = src._gaps
     return out, k
 
 
@@ -483,26 +532,24 @@ def _run(
         tau_factor=stat.tau_factor,
     )
     tau0 = 1.0 / rate_f
-    L = src.chunk_size
-    phase_kernel, freq_kernel = _KERNELS[stat.name]
-    if ms.size == 0:
-        var, n = np.empty(0), np.empty(0, dtype=np.int64)
-    elif dtype == "phase":
-        var, n = phase_kernel(_Detrended(src), ms, tau0, L)
+    gaps = src._gaps
+    if gaps is None:
+        var, n = _plain_variance(stat.name, src, dtype, ms, tau0, total, src.chunk_size)
     else:
-        centred = _Centred(src, np.float64(total) / src.n)
-        if freq_kernel is not None:
-            var, n = freq_kernel(centred, ms, tau0, L)
-        else:
-            var, n = phase_kernel(_Integrated(centred, tau0, L), ms, tau0, L)
+        var, n, n_eff = _gap_variance(stat, src, dtype, ms, rate_f, total, gaps)
+        explicit = m is not None or not isinstance(taus, str)
+        ms, var, n, n_eff = drop_empty_factors(stat.name, ms, var, n, n_eff, explicit=explicit)
     var = unscale_variance(np.where(var < 0.0, 0.0, np.asarray(var, dtype=float)), k, stat.name)
     result = StabilityResult(
         statistic=stat.name, taus=stat.tau_factor * ms * tau0, m=ms, var=var, dev=np.sqrt(var),
         n=np.asarray(n, dtype=np.int64), rate=rate_f, data_type=dtype, n_points=int(n_points),
     )
+    if gaps is not None:
+        result = replace(result, n_missing=gaps.missing, n_effective=n_eff)
     if raw:
         return result
-    return _attach(result, src, dtype, alpha=alpha_i, confidence=conf, ci=ci_m, id_factors=id_factors(stat, ms))
+    return _attach(result, src, dtype, alpha=alpha_i, confidence=conf, ci=ci_m, id_factors=id_factors(stat, ms),
+                   gaps=gaps is not None)
 
 
 def _finish(result: StabilityResult, data: object, data_type: str, *, alpha: object = None,
@@ -512,4 +559,5 @@ def _finish(result: StabilityResult, data: object, data_type: str, *, alpha: obj
     alpha_i, conf, ci_m = check_options(alpha, confidence, ci)
     # Noise identification is scale free: on the scaled series, as in _run().
     src, _ = _scaled(as_chunked(data))
-    return _attach(result, src, data_type, alpha=alpha_i, confidence=conf, ci=ci_m, identified=identified)
+    return _attach(result, src, data_type, alpha=alpha_i, confidence=conf, ci=ci_m, identified=identified,
+                   gaps=src._gaps is not None)

@@ -2,7 +2,9 @@
 
 numpy's pairwise summation reproduced piecewise (:func:`_pairwise_sum`), the
 series derived from a record as the in-memory path derives them (mean removed,
-line removed, integrated, differenced), and the exact running sums, window sums,
+line removed — through the first and last present points when samples are
+missing —, integrated, differenced, one gap-free run), the runs of present
+samples (:func:`_present_runs`), and the exact running sums, window sums,
 block sums and strided reads that the kernels (:mod:`.kernels`) are built from.
 See the package docstring (:mod:`sigmatau.scale.chunked`) for how and why.
 """
@@ -10,6 +12,7 @@ See the package docstring (:mod:`sigmatau.scale.chunked`) for how and why.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Callable, Iterator, Optional, Protocol, Sequence
 
 import numpy as np
@@ -32,6 +35,17 @@ class _Series(Protocol):
     def read_strided(self, start: int, stop: int, step: int) -> np.ndarray: ...
 
     def __sigmatau_statistic__(self, stat: Statistic, **options: object) -> StabilityResult: ...
+
+
+@dataclass(frozen=True)
+class _Gaps:
+    """What the validating pass learns of the missing samples (NaN) of a record."""
+
+    #: Missing (NaN) samples.
+    missing: int
+    #: Index of the first and of the last present sample.
+    first: int
+    last: int
 
 
 # ---------------------------------------------------------------------- pairwise sums
@@ -112,6 +126,58 @@ class _Detrended(_Raw):
         return (x - self.x0) - self._ramp(start + step * np.arange(count))
 
 
+class _GapDetrended(_Raw):
+    """Phase with gaps minus the line through its first and last present points, as
+    :func:`sigmatau.core.gaps.detrended_phase`: ``(x - x_i0) - slope·(i - i0)``, NaN kept.
+
+    ``first`` and ``last`` are the indices of those points (found by the validating pass).
+    """
+
+    def __init__(self, src: _Series, first: int, last: int) -> None:
+        super().__init__(src)
+        self.i0 = first
+        self.x0 = src.read(first, first + 1)[0]
+        # One point present: no line, only the offset goes (as detrended_phase).
+        self.slope = (src.read(last, last + 1)[0] - self.x0) / (last - first) if last > first else None
+
+    def _line(self, idx: np.ndarray) -> np.ndarray:
+        return self.slope * (idx.astype(np.float64) - self.i0)
+
+    def read(self, a: int, b: int) -> np.ndarray:
+        x = self.src.read(a, b) - self.x0
+        return x if self.slope is None else x - self._line(np.arange(a, b))
+
+    def take(self, start: int, step: int, count: int) -> np.ndarray:
+        x = self.src.read_strided(start, start + (count - 1) * step + 1, step) - self.x0
+        return x if self.slope is None else x - self._line(start + step * np.arange(count))
+
+
+class _Slice:
+    """Samples ``a … b-1`` of a series, indexed from 0 (one gap-free run)."""
+
+    def __init__(self, src: _Series, a: int, b: int) -> None:
+        self.src, self.a, self.n = src, a, b - a
+
+    def read(self, a: int, b: int) -> np.ndarray:
+        return self.src.read(self.a + a, self.a + b)
+
+
+def _present_runs(src: _Series, L: int) -> Iterator[tuple[int, int]]:
+    """``(start, stop)`` of each run of present (non-NaN) samples, in order, read in chunks of L."""
+    open_at: Optional[int] = None
+    for a in range(0, src.n, L):
+        present = ~np.isnan(src.read(a, min(a + L, src.n)))
+        edges = np.diff(present.astype(np.int8), prepend=np.int8(open_at is not None))
+        starts = (a + np.flatnonzero(edges == 1)).tolist()
+        stops = (a + np.flatnonzero(edges == -1)).tolist()
+        if open_at is not None:
+            starts.insert(0, open_at)
+        open_at = starts.pop() if len(starts) > len(stops) else None
+        yield from zip(starts, stops)
+    if open_at is not None:
+        yield open_at, src.n
+
+
 class _Integrated:
     """Phase of centred frequency samples: ``x_0 = 0``, ``x_k = τ0·Σ_{i<k} y_i`` (sequential sum).
 
@@ -169,6 +235,19 @@ class _SumSq:
     @property
     def total(self) -> float:
         return math.fsum(self.parts)
+
+
+class _FiniteSumSq(_SumSq):
+    """Σ t² over the finite terms t (NaN marks a term that reads a gap), and how many there are."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.n = 0
+
+    def add(self, v: np.ndarray) -> None:
+        ok = v[~np.isnan(v)]
+        self.n += ok.size
+        super().add(ok)
 
 
 class _Prefix:
