@@ -263,6 +263,7 @@ def _compute(name: str, data: object, rate: object, data_type: object, taus: obj
 
 
 _DOC = """
+
     Parameters
     ----------
     data : array_like

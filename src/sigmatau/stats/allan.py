@@ -56,6 +56,7 @@ _DOC_COMMON = """
     StabilityResult
         With ``alpha``, ``alpha_estimate``, ``edf``, ``ci_low``, ``ci_high``
         and ``ci_reason`` filled unless ``ci`` is None.
+
 """
 
 

@@ -245,8 +245,8 @@ def greenhall_edf(alpha: int, d: int, m: int, F: int, S: int, N: int, *,
 
     Notes
     -----
-    With ``sw(t, α)`` = −|t|, t² ln|t|, |t|³, −t⁴ ln|t|, −|t|⁵, t⁶ ln|t|, |t|⁷
-    for α = 2 … −4,
+    With ``sw(t, α)`` = ``−|t|``, ``t² ln|t|``, ``|t|³``, ``−t⁴ ln|t|``,
+    ``−|t|⁵``, ``t⁶ ln|t|``, ``|t|⁷`` for α = 2 … −4,
 
     .. math::
 

@@ -17,7 +17,7 @@ from typing import Any, Union
 from ...errors import SigmaTauError
 
 
-#: Robust z-score (0.6745·|x − median|/MAD on log10 values) beyond which a term is an
+#: Robust z-score (``0.6745·|x − median|/MAD`` on log10 values) beyond which a term is an
 #: outlier of its fleet (Iglewicz & Hoaglin's 3.5).
 OUTLIER_Z = 3.5
 
