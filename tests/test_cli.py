@@ -217,7 +217,13 @@ def test_report_html_is_self_contained(analyzed):
     html = (analyzed / "report.html").read_text()
     assert html.startswith("<!DOCTYPE html>")
     assert html.count('src="data:image/png;base64,') == 8  # 2 σ–τ + 6 signal figures
-    assert "http://" not in html and "https://" not in html and "<script" not in html
+    # Nothing is fetched: no src/href to another host. The only scripts are the inlined chart library,
+    # its start-up code and the two charts' specs (JSON data, not code); the only URLs inside the
+    # library's text are its own (the SVG namespace, links of an actions menu that is switched off).
+    assert not re.search(r'(?:src|href)\s*=\s*["\']?(?:https?:)?//', html, re.I)
+    assert html.count("<script") == 4 and html.count('<script type="application/json" class="ichart-spec"') == 2
+    outside = re.sub(r"<script[^>]*>.*?</script>", "", html, flags=re.S)
+    assert "http://" not in outside and "https://" not in outside
     assert "gyroscope_noise_density" in html  # the YAML
     assert "Data checks" in html and "Noise model" in html and "AF" in html
 

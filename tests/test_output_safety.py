@@ -438,3 +438,79 @@ def test_no_message_offers_an_option_that_would_be_refused(tmp_path, capsys, one
     assert code == 2
     _one_line_error(err, "exists", "--force")
     assert _run(["simulate", made, "--duration", "10", "--force"], capsys)[0] == 0
+
+
+# ------------------------------------------------------------- report.html's interactive charts
+
+CHART_NAMES = ["</script><script>alert(1)</script>", "<!--", "\"quoted\" & 'single' \u2028 </SCRIPT >",
+               "<img src=x onerror=alert(2)>"]
+
+
+def _script_elements(page: str) -> list[tuple[dict, str]]:
+    """Every ``<script>`` element of the page as the HTML parser sees it: (attributes, text)."""
+    from html.parser import HTMLParser
+
+    found: list[tuple[dict, str]] = []
+
+    class Scripts(HTMLParser):
+        def handle_starttag(self, tag, attrs):
+            if tag == "script":
+                found.append((dict(attrs), ""))
+
+        def handle_data(self, data):
+            if found and self.lasttag == "script" and self.cdata_elem == "script":
+                found[-1] = (found[-1][0], found[-1][1] + data)
+
+    Scripts(convert_charrefs=True).feed(page)
+    return found
+
+
+def test_report_charts_keep_hostile_channel_names_as_data(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    pytest.importorskip("vl_convert")  # the interactive extra
+    src = _log(tmp_path / "h.csv", CHART_NAMES, np.random.default_rng(25))
+    cols = ",".join(str(i) for i in range(1, len(CHART_NAMES) + 1))
+    code, _, err = _run(["analyze", src, "--out", tmp_path / "o", "--stat", "oadev,tdev", "--figures", "png",
+                         "--columns", cols, "--quiet"], capsys)
+    assert code == 0, err
+    page = (tmp_path / "o" / "report.html").read_text(encoding="utf-8")
+    scripts = _script_elements(page)
+    # one spec (one σ–τ figure: the group of these channels), the library and the code that draws:
+    # no element that a name could have opened
+    assert [a.get("type") for a, _ in scripts] == ["application/json", None, None]
+    assert page.lower().count("<script") == 3 and page.lower().count("</script>") == 3
+    spec = json.loads(scripts[0][1])
+    names = [c["name"] for c in json.loads((tmp_path / "o" / "results.json").read_text(encoding="utf-8"))["channels"]]
+    assert names[:2] == CHART_NAMES[:2] and "</SCRIPT >" in names[2]  # (the CSV reader's own quoting aside)
+    for data in ("left", "right"):
+        assert [r["channel"] for r in spec["datasets"][data]] == names  # back exactly, as data
+    for name in names:
+        assert all(name not in text for _, text in scripts)  # escaped wherever it is
+    assert "<script>alert" not in page and "<img src=x" not in page and "<!--" not in page.replace(
+        "<!DOCTYPE", "")
+
+
+def test_chart_json_cannot_end_its_script_element():
+    from sigmatau.report.interactive import chart_html
+
+    spec = {"title": {"text": "</script><!-- \u2028\u2029 & <b>"}}
+    html_text = chart_html(spec, 0)
+    body = html_text.split('data-target="ichart-0">', 1)[1].rsplit("</script>", 1)[0]  # the JSON in its element
+    assert "<" not in body and ">" not in body and "&" not in body and "\u2028" not in body
+    assert json.loads(body) == spec
+
+
+def test_chart_library_cannot_end_its_script_element(monkeypatch):
+    import types
+
+    from sigmatau.report import interactive
+
+    interactive._bundle.cache_clear()
+    monkeypatch.setitem(sys.modules, "vl_convert",
+                        types.SimpleNamespace(javascript_bundle=lambda: "var s = '</SCRIPT><script>x()';"))
+    try:
+        script = interactive.library_script()
+    finally:
+        monkeypatch.undo()
+        interactive._bundle.cache_clear()
+    assert "var s = '<\\/SCRIPT><script>x()';" in script and script.lower().count("</script") == 2

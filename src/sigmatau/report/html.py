@@ -3,8 +3,11 @@
 The page holds the input and its data checks, the noise model of every channel
 with intervals in SI and customary units, the datasheet comparison, the Kalibr
 YAML, the figures (PNG embedded as data URIs) and every statistic's table
-(Stable32 layout: AF, τ, n, α, min σ, σ, max σ). It needs no network, no
-script and no other file, so it can be mailed or archived as it is.
+(Stable32 layout: AF, τ, n, α, min σ, σ, max σ). It needs no network and no
+other file, so it can be mailed or archived as it is. With the ``interactive``
+extra each σ–τ figure has an interactive chart under it
+(:mod:`sigmatau.report.interactive`: its library is inlined, its data escaped
+there); without it the page has no script.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ th,td{border:1px solid #d0d0d0;padding:.2em .5em;text-align:right;vertical-align
 th{background:#f2f2f2}td.l,th.l{text-align:left}
 pre{background:#f6f6f6;border:1px solid #ddd;padding:.7em;overflow-x:auto;font-size:.85em}
 figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #eee}
+.ichart{width:100%;margin:.6em 0 .3em}.ichart.vega-embed{display:flex;width:100%}
 figcaption{font-size:.88em;color:#444}
 .flag{color:#8a4b00}.warn{color:#a00}.muted{color:#666}.ok{color:#185c18}
 details{margin:.3em 0}summary{cursor:pointer}
@@ -192,17 +196,28 @@ def _kalibr_section(a: Any, yaml_text: Optional[str]) -> str:
             f" densities in SI units.</p><pre>{_e(yaml_text)}</pre>")
 
 
-def _figures_section(figures: Sequence[dict], folder: Optional[Path], note: str) -> str:
+def _figures_section(figures: Sequence[dict], folder: Optional[Path], note: str, charts: Any = None) -> str:
+    """The figures, each PNG embedded; under each σ–τ figure its interactive chart when ``charts`` has one.
+
+    ``charts`` is a :class:`~sigmatau.report.interactive.InteractiveCharts`: its
+    fragments are HTML built (and escaped) there, placed as they are. (Typed
+    ``Any``: this module may not import that one, which imports it through
+    :mod:`~sigmatau.report.spectrum`.)
+    """
     out = ['<h2 id="figures">Figures</h2>']
     if note:
         out.append(f'<p class="flag">{_e(note)}</p>')
+    fragments = getattr(charts, "fragments", None) or {}
+    if getattr(charts, "note", ""):
+        out.append(f'<p class="muted" id="interactive-note">{_e(charts.note)}</p>')
     for f in figures:
         path = folder / f"{f['stem']}.png" if folder is not None else None
         if path is None or not path.is_file():
             continue
         b64 = base64.b64encode(path.read_bytes()).decode("ascii")
         out.append(f'<figure id="fig-{_e(f["stem"])}"><img src="data:image/png;base64,{b64}" '
-                   f'alt="{_e(f["caption"])}"><figcaption>{_e(f["caption"])}</figcaption></figure>')
+                   f'alt="{_e(f["caption"])}">{fragments.get(f["stem"], "")}'
+                   f'<figcaption>{_e(f["caption"])}</figcaption></figure>')
     return "".join(out)
 
 
@@ -230,7 +245,7 @@ def _tables_section(a: Any) -> str:
 
 
 def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path] = None,
-           yaml_text: Optional[str] = None, figure_note: str = "") -> str:
+           yaml_text: Optional[str] = None, figure_note: str = "", charts: Any = None) -> str:
     """The report page as HTML text.
 
     Parameters
@@ -246,6 +261,10 @@ def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path
         The Kalibr YAML to show.
     figure_note : str
         Why figures are missing or fewer than the channels, when they are (shown as given).
+    charts : InteractiveCharts, optional
+        The interactive σ–τ charts (:func:`sigmatau.report.interactive.report_charts`):
+        each fragment under its figure, the note atop the figures, the script at the
+        end of the page. None: static figures only.
     """
     a = analysis
     title = f"sigmatau report — {Path(a.log.source.path).name}"
@@ -262,8 +281,10 @@ def render(analysis: Any, *, figures: Sequence[dict] = (), folder: Optional[Path
         f"<h1>{_e(title)}</h1>",
         f'<p class="muted">sigmatau {_e(a.version)}, {stamp}; analysis took {a.seconds:.1f} s. {nav}</p>',
         _overview_section(a), _input_section(a), _checks_section(a), _model_section(a), _kalibr_section(a, yaml_text),
-        _figures_section(figures, folder, figure_note), _tables_section(a),
+        _figures_section(figures, folder, figure_note, charts), _tables_section(a),
         f'<h2 id="settings">Settings</h2><pre>{_e(settings)}</pre>',
+        # The charts' library and drawing code, after everything they draw into.
+        getattr(charts, "script", "") or "",
         "</body></html>",
     ]
     return "\n".join(parts) + "\n"

@@ -272,6 +272,9 @@ def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool, e
             yaml_text = text
     if report:
         from .html import render
+        from .interactive import report_charts
 
+        # The interactive charts follow the σ–τ figures written, within the same caps.
+        charts = report_charts(analysis, figs, max_channels=MAX_CURVES_PER_FIGURE)
         _write_text(folder / "report.html", render(analysis, figures=figs, folder=folder, yaml_text=yaml_text,
-                                                   figure_note=figure_note))
+                                                   figure_note=figure_note, charts=charts))
