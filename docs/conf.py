@@ -220,7 +220,14 @@ def notes_toctree(app, docname, source) -> None:
         source[0] += "\n```{toctree}\n:maxdepth: 1\n\n" + "".join(f"/{page}\n" for page in pages) + "```\n"
 
 
+def notes_outdated(app, env, added, changed, removed) -> list[str]:
+    """Read the Notes page again on every build: a page added to docs/ since the last build
+    changes its toctree although its own file did not change."""
+    return [NOTES_PAGE]
+
+
 def setup(app):
     app.connect("source-read", notes_toctree)
+    app.connect("env-get-outdated", notes_outdated)
     app.connect("autodoc-process-docstring", document_constants, priority=100)  # before numpydoc
     app.connect("env-check-consistency", check_api_coverage)
