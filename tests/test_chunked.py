@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 import sigmatau
+from helpers import assert_same_result
 from _noise import NOISES
 from sigmatau.scale import chunked
 from sigmatau.errors import DataError, ParameterError
@@ -39,23 +40,7 @@ def _series(noise: str, data_type: str, n: int = N) -> np.ndarray:
 
 
 def _assert_same(got: sigmatau.StabilityResult, ref: sigmatau.StabilityResult, rtol: float = RTOL) -> None:
-    assert got.statistic == ref.statistic and got.data_type == ref.data_type
-    assert got.n_points == ref.n_points and got.rate == ref.rate
-    np.testing.assert_array_equal(got.m, ref.m)
-    np.testing.assert_array_equal(got.taus, ref.taus)
-    np.testing.assert_array_equal(got.n, ref.n)
-    np.testing.assert_allclose(got.var, ref.var, rtol=rtol, atol=0)
-    np.testing.assert_allclose(got.dev, ref.dev, rtol=rtol, atol=0)
-    assert got.bias == ref.bias
-    for name in ("alpha", "edf", "ci_low", "ci_high", "bias_factor"):
-        a, b = getattr(got, name), getattr(ref, name)
-        assert (a is None) == (b is None), name
-        if a is not None:
-            np.testing.assert_allclose(a, b, rtol=1e-9, atol=0, equal_nan=True, err_msg=name)
-    if ref.alpha_estimate is not None:
-        np.testing.assert_allclose(got.alpha_estimate, ref.alpha_estimate, rtol=0, atol=1e-9, equal_nan=True)
-    assert got.ci_reason == ref.ci_reason
-    assert got.confidence == ref.confidence
+    assert_same_result(got, ref, rtol)
 
 
 def _sha256(path: Path) -> str:

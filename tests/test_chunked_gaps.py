@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 import sigmatau
+from helpers import assert_same_result
 from _noise import NOISES
 from sigmatau.errors import DataError
 from sigmatau.scale import chunked
@@ -74,27 +75,7 @@ def _with_gaps(data: np.ndarray, where: np.ndarray) -> np.ndarray:
 
 
 def _assert_same(got: sigmatau.StabilityResult, ref: sigmatau.StabilityResult, rtol: float = RTOL) -> None:
-    assert got.statistic == ref.statistic and got.data_type == ref.data_type
-    assert got.n_points == ref.n_points and got.rate == ref.rate
-    np.testing.assert_array_equal(got.m, ref.m)
-    np.testing.assert_array_equal(got.taus, ref.taus)
-    np.testing.assert_array_equal(got.n, ref.n)
-    assert got.n_missing == ref.n_missing
-    assert (got.n_effective is None) == (ref.n_effective is None)
-    if ref.n_effective is not None:
-        np.testing.assert_array_equal(got.n_effective, ref.n_effective)
-    np.testing.assert_allclose(got.var, ref.var, rtol=rtol, atol=0)
-    np.testing.assert_allclose(got.dev, ref.dev, rtol=rtol, atol=0)
-    assert got.bias == ref.bias
-    for name in ("alpha", "edf", "ci_low", "ci_high", "bias_factor"):
-        a, b = getattr(got, name), getattr(ref, name)
-        assert (a is None) == (b is None), name
-        if a is not None:
-            np.testing.assert_allclose(a, b, rtol=1e-9, atol=0, equal_nan=True, err_msg=name)
-    if ref.alpha_estimate is not None:
-        np.testing.assert_allclose(got.alpha_estimate, ref.alpha_estimate, rtol=0, atol=1e-9, equal_nan=True)
-    assert got.ci_reason == ref.ci_reason
-    assert got.confidence == ref.confidence
+    assert_same_result(got, ref, rtol)
 
 
 def _outcome(call: Callable[[], sigmatau.StabilityResult]):

@@ -21,7 +21,7 @@ import re
 
 import numpy as np
 import pytest
-from helpers import cli_error_line, run_cli
+from helpers import cli_error_line, run_cli, simulated_imu_log
 
 HOSTILE = [
     "/imu: 0", "/it's \"quoted\"", '!!python/object/apply:os.system ["touch PWNED"]', "/ジャイロ/ü", "# not a comment",
@@ -34,14 +34,9 @@ CONTROL = ["/imu0\nupdate_rate: 1.0", "/tab\there", "/esc\x1b[2J", "/cr\rx", "/l
 @pytest.fixture(scope="module")
 def analysis():
     """A 6-axis simulated log (2 min at 50 Hz, seed 11) analysed with OADEV only."""
-    from sigmatau.analysis import analyze_log, log_from_arrays
-    from sigmatau.imu import simulate
+    from sigmatau.analysis import analyze_log
 
-    streams = np.random.SeedSequence(11).spawn(6)
-    chans = {f"{g}_{a}": simulate(f"lsm6dsl-{g}", duration=120, rate=50, rng=np.random.default_rng(s))
-             for (g, a), s in zip([(g, a) for g in ("gyro", "accel") for a in "xyz"], streams)}
-    units = {k: "rad/s" if k.startswith("gyro") else "m/s^2" for k in chans}
-    log = log_from_arrays(chans, rate=50, units=units, name="sim")
+    log = simulated_imu_log()
     return analyze_log(log, statistics="oadev", workers=1, inflate=1.5)
 
 

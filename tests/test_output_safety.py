@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import cli_error_line, run_cli
+from helpers import cli_error_line, run_cli, simulated_imu_log
 
 
 FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
@@ -96,14 +96,9 @@ EXPECTED_KEYS = ["accelerometer_noise_density", "accelerometer_random_walk", "gy
 @pytest.fixture(scope="module")
 def imu_analysis():
     """A 6-axis simulated log (2 min at 50 Hz, seed 11) analysed with OADEV only."""
-    from sigmatau.analysis import analyze_log, log_from_arrays
-    from sigmatau.imu import simulate
+    from sigmatau.analysis import analyze_log
 
-    streams = np.random.SeedSequence(11).spawn(6)
-    chans = {f"{g}_{a}": simulate(f"lsm6dsl-{g}", duration=120, rate=50, rng=np.random.default_rng(s))
-             for (g, a), s in zip([(g, a) for g in ("gyro", "accel") for a in "xyz"], streams)}
-    units = {k: "rad/s" if k.startswith("gyro") else "m/s^2" for k in chans}
-    log = log_from_arrays(chans, rate=50, units=units, name="sim")
+    log = simulated_imu_log()
     return analyze_log(log, statistics="oadev", workers=1)
 
 

@@ -24,6 +24,7 @@ import shutil
 import numpy as np
 import pytest
 
+from helpers import simulated_imu_log
 from sigmatau.cli import main
 
 pytest.importorskip("matplotlib")
@@ -282,14 +283,9 @@ def test_hostile_channel_names_are_text_in_the_interactive_chart(tmp_path, drive
 @pytest.fixture(scope="module")
 def imu_analysis():
     """A 6-axis simulated log (2 min at 50 Hz, seed 11): OADEV, MDEV, TDEV and the noise model."""
-    from sigmatau.analysis import analyze_log, log_from_arrays
-    from sigmatau.imu import simulate
+    from sigmatau.analysis import analyze_log
 
-    streams = np.random.SeedSequence(11).spawn(6)
-    chans = {f"{g}_{a}": simulate(f"lsm6dsl-{g}", duration=120, rate=50, rng=np.random.default_rng(s))
-             for (g, a), s in zip([(g, a) for g in ("gyro", "accel") for a in "xyz"], streams)}
-    units = {k: "rad/s" if k.startswith("gyro") else "m/s^2" for k in chans}
-    log = log_from_arrays(chans, rate=50, units=units, name="sim")
+    log = simulated_imu_log()
     return analyze_log(log, statistics=["oadev", "mdev", "tdev"], workers=1)
 
 

@@ -115,15 +115,26 @@ def _lag1_gaps(batches: Callable[[], Iterator[np.ndarray]], m: int, dtype: str, 
             f" got {first[0][0]} outside the gaps")
     means = [total / n if n else 0.0 for n, _, total in first]
     den, num = _centred_sums(batches, dmax, means)
-    theta = 1 if dtype == "phase" else 0
-    d = 0
-    while True:
+
+    def r1_at(d: int) -> float:
         n, pairs = first[d][0], first[d][1]
         if n < 2 or den[d] == 0.0:
             raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
         if pairs == 0:
             raise noiseid.InsufficientDataError("no two neighbouring points are both present at this averaging factor")
-        r1 = num[d] / den[d] * (n - 1) / pairs
+        return num[d] / den[d] * (n - 1) / pairs
+
+    return _lag1_decision(r1_at, m, dtype, dmax)
+
+
+def _lag1_decision(r1_at: Callable[[int], float], m: int, dtype: str, dmax: int) -> tuple[int, float]:
+    """α and α̂ from the lag-1 autocorrelation ``r1_at(d)`` of the d-th differences, d = 0, 1, …,
+    by the rule of :func:`sigmatau.noiseid.lag1_acf_noise_id`: difference until δ = r1/(1 + r1)
+    falls below 0.25 (or d reaches ``dmax``); then α = −round(2δ) − 2d, plus 2 for phase data."""
+    theta = 1 if dtype == "phase" else 0
+    d = 0
+    while True:
+        r1 = r1_at(d)
         if r1 <= -1.0:
             raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
         delta = r1 / (1.0 + r1)
@@ -160,19 +171,13 @@ def _lag1(raw: _Raw, m: int, dtype: str, dmax: int, L: int, gaps: bool = False):
     if gaps:
         return _lag1_gaps(batches, m, dtype, dmax)
     den, num = _lag1_streamed(batches, nz, dmax)
-    theta = 1 if dtype == "phase" else 0
-    d = 0
-    while True:
+
+    def r1_at(d: int) -> float:
         if den[d] == 0.0:
             raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
-        r1 = num[d] / den[d]
-        if r1 <= -1.0:
-            raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
-        delta = r1 / (1.0 + r1)
-        if delta < 0.25 or d >= dmax:
-            break
-        d += 1
-    return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
+        return num[d] / den[d]
+
+    return _lag1_decision(r1_at, m, dtype, dmax)
 
 
 def _b1_streamed(batches: Callable[[], Iterator[np.ndarray]], m: int) -> tuple[float, int]:
