@@ -226,8 +226,10 @@ def test_warm_up_searched_without_the_temperature_dependence_keeps_the_tempco_un
     # A warm-up and a temperature ramp together: the main job's preparation (warm-up searched on
     # the record less a first temperature fit) against the single pass warm-up → temperature fit.
     # 40 simulated gyro records; the tempco's ±2σ interval must cover the truth at about its
-    # rate through the main job (binomial bound, 3σ below 0.954) and far more often than with
-    # the single pass, which ends the warm-up early on a ramp (measured: 0.41 on 150 records).
+    # rate through the main job (binomial bound, 3σ below 0.954). The single pass ends the
+    # warm-up early on a ramp; since the tempco's error models coloured bias noise it counts the
+    # leftover transient as bias wander, so it covers too (146/150 measured), but with an error
+    # about 3.6× larger and an estimate further off (150 records: mean z −0.90 against −0.19).
     from sigmatau.analysis import log_from_arrays
     from sigmatau.imu.simulation import temperature_profile
     from sigmatau.pipeline.prepare import prepare_log
@@ -236,6 +238,8 @@ def test_warm_up_searched_without_the_temperature_dependence_keeps_the_tempco_un
     rate, duration, truth, trials = 100.0, 1800.0, 2e-5, 40
     temp = temperature_profile(duration, rate, "ramp", low=20.0, high=40.0)
     hits = {"pipeline": 0, "single": 0}
+    se = {"pipeline": [], "single": []}
+    err = {"pipeline": [], "single": []}
     for seed in range(trials):
         y = simulate("lsm6dsl-gyro", duration=duration, rate=rate, warmup=(3e-4, 60.0), temperature=temp,
                      tempco=truth, rng=np.random.default_rng([20261125, seed]))
@@ -244,15 +248,21 @@ def test_warm_up_searched_without_the_temperature_dependence_keeps_the_tempco_un
         rec = prepare_log(log, Preparation(warmup="auto", temperature="auto")).records["gyro_x"]
         tc = next(r for r in rec if r["step"] == "temperature")["estimates"]["tempco"]
         hits["pipeline"] += abs(tc["value"] - truth) < 2 * tc["stderr"]
+        se["pipeline"].append(tc["stderr"])
+        err["pipeline"].append(abs(tc["value"] - truth))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sigmatau.SigmaTauWarning)
             first = warmup(y, rate=rate)
             cut = int(first.details["end_index"] or 0) if first.details["detected"] else 0
             est = temperature_fit(y[cut:], temp[cut:], rate=rate).estimates["tempco"]
         hits["single"] += abs(est.value - truth) < 2 * est.stderr
+        se["single"].append(est.stderr)
+        err["single"].append(abs(est.value - truth))
     p = 0.9545
     assert hits["pipeline"] / trials > p - 3 * np.sqrt(p * (1 - p) / trials), hits
-    assert hits["pipeline"] - hits["single"] >= trials // 4, hits
+    ratio = float(np.median(np.array(se["single"]) / np.array(se["pipeline"])))
+    assert ratio > 2.0, (ratio, hits)
+    assert np.mean(err["pipeline"]) < 0.5 * np.mean(err["single"]), (np.mean(err["pipeline"]), np.mean(err["single"]))
 
 
 def test_gauss_markov_term_in_the_main_job(tmp_path, capsys):
