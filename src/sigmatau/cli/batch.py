@@ -127,9 +127,9 @@ def _cmd_batch(args: Any, console: Any) -> int:
         args.patterns, args.out, scheduler=args.scheduler, workers=args.workers, read=_read_options(args),
         statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
         axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic, datasheet=_datasheet(args.datasheet),
-        figures=figures, report=not args.no_report, exports=_exports(args), limits=args.limits, limit_margin=args.limit_margin,
-        outlier_z=args.outlier_z, force=args.force_rerun, progress=progress, warmup=_warmup_option(args.warmup),
-        temperature=args.temperature)
+        figures=figures, report=not args.no_report, exports=_exports(args), limits=args.limits,
+        limit_margin=args.limit_margin, outlier_z=args.outlier_z, force=args.force_rerun, progress=progress,
+        warmup=_warmup_option(args.warmup), temperature=args.temperature)
     print(fleet.summary())
     print(f"wrote {args.out}/fleet.html, fleet.csv, fleet_logs.csv, fleet.json; per log: {args.out}/{LOGS_DIR}/")
     return EXIT_OK if fleet.ok else EXIT_DATA

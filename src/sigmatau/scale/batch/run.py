@@ -166,7 +166,8 @@ def analyze_many(
     try:
         return _run_batch(out_p, files, created=created, client=client, scheduler=scheduler, workers=workers,
                           read_kw=read_kw, analysis_kw=analysis_kw, fmts=fmts, report=report, exports=targets,
-                          lim=lim, outlier_z=outlier_z, fleet_figures=fleet_figures, force=force, progress=progress, t0=t0)
+                          lim=lim, outlier_z=outlier_z, fleet_figures=fleet_figures, force=force, progress=progress,
+                          t0=t0)
     except ClusterError:
         if created:  # nothing was analysed: leave no trace of the attempt
             _remove_if_ours_and_empty(out_p)

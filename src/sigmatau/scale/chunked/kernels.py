@@ -410,7 +410,6 @@ def _pooled_runs(stat: Statistic, src: _Series, dtype: str, ms: np.ndarray, rate
     hold (``m ≤ max_m(points)``), and the phase points of a contiguous record with as many
     terms are ``N_s + (n − n_s)`` for the last run s with terms.
     """
-    tau0 = 1.0 / rate
     extra = 1 if dtype == "freq" else 0  # a kernel on S frequency samples sees S + 1 phase points
     minimum = stat.min_points if stat.min_run_points is None else stat.min_run_points
     use_freq = dtype == "freq" and stat.compute_freq is not None
