@@ -220,19 +220,22 @@ def openvins_yaml(analysis: Any) -> str:
 
 
 def _axis_values(analysis: Any, group: str, term: str) -> tuple[list[float], list[str], list[str]]:
-    """Each axis's value of ``term`` in SI (bound when unresolved), times the inflation; names; bound axes."""
+    """Each axis's value of ``term`` in SI (its upper bound when unresolved), times the inflation;
+    the axes' names; the axes given as bounds (``"name (no bound: 0)"`` when the record gives not
+    even a bound, which the files' comments then say)."""
     k = _entry(analysis)
     chans = [c for c in analysis.channels if c.group == group and c.model is not None]
     vals, names, bounds = [], [], []
     for c in chans:
         p = getattr(c.model, term).si()
         v = p.value if p.resolved else p.high
+        names.append(c.name)
         if v is None or not math.isfinite(v):
             v = 0.0
-        vals.append(float(v) * float(k["inflation"]))
-        names.append(c.name)
-        if not p.resolved:
+            bounds.append(f"{c.name} (no bound: 0)")
+        elif not p.resolved:
             bounds.append(c.name)
+        vals.append(float(v) * float(k["inflation"]))
     return vals, names, bounds
 
 
