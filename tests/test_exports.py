@@ -268,3 +268,15 @@ def test_cli_refuses_an_unknown_target_before_reading(tmp_path, capsys):
     assert code == 2
     assert "--export" in cli_error_line(err) and "ros" in err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_term_without_even_a_bound_is_zero_and_said(analysis):
+    from sigmatau.outputs import export_text
+
+    ch = analysis.channels[0]
+    unknown = dataclasses.replace(ch.model.B, value=float("nan"), high=float("inf"), resolved=False)
+    channels = (dataclasses.replace(ch, model=dataclasses.replace(ch.model, B=unknown)), *analysis.channels[1:])
+    text = export_text(dataclasses.replace(analysis, channels=channels), "matlab")
+    objects, _ = _matlab(text)
+    assert objects["gyro"][1]["BiasInstability"][0] == 0.0
+    assert f"upper bound on {ch.name} (no bound: 0)" in text
