@@ -36,7 +36,7 @@ import math
 from typing import Any, Callable, Optional, Sequence
 
 from ..errors import ParameterError
-from .formats import kalibr_yaml, printable
+from .formats import KALIBR_KEYS, kalibr_yaml, printable
 
 __all__ = ["EXPORTS", "EXPORT_FILES", "export_text", "vins_yaml", "openvins_yaml", "matlab_script", "gtsam_script",
            "parse_exports"]
@@ -46,8 +46,6 @@ EXPORT_FILES = {"kalibr": "imu.yaml", "vins": "vins_imu.yaml", "openvins": "kali
                 "matlab": "imu_params.m", "gtsam": "gtsam_imu_params.py"}
 #: The export targets, in the order of :data:`EXPORT_FILES`.
 EXPORTS = tuple(EXPORT_FILES)
-
-_SENSORS = (("accelerometer", "accel", "m/s^2"), ("gyroscope", "gyro", "rad/s"))
 
 
 def parse_exports(value: object) -> tuple[str, ...]:
@@ -205,10 +203,8 @@ def openvins_yaml(analysis: Any) -> str:
              "intrinsics below are identities: sigmatau does not estimate scale, misalignment or g-sensitivity"]
     eye3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]
     eye4 = [[1.0 if i == j else 0.0 for j in range(4)] for i in range(4)]
-    units = {"accelerometer_noise_density": "m/s^2/sqrt(Hz)", "accelerometer_random_walk": "m/s^3/sqrt(Hz)",
-             "gyroscope_noise_density": "rad/s/sqrt(Hz)", "gyroscope_random_walk": "rad/s^2/sqrt(Hz)"}
     body = ["imu0:\n", _matrix("T_i_b", eye4)]
-    body += [f"  {key}: {_float(float(k[key]))}  # [{unit}]\n" for key, unit in units.items()]
+    body += [f"  {key}: {_float(float(k[key]))}  # [{k['units'][key]}]\n" for key in KALIBR_KEYS]
     body += [f"  rostopic: {_quoted(k['rostopic'], 'rostopic')}\n", "  time_offset: 0.0\n",
              f"  update_rate: {_float(float(k['update_rate']))}\n", '  model: "kalibr"\n']
     body += [_matrix(name, eye3) for name in ("Tw", "R_IMUtoGYRO", "Ta", "R_IMUtoACC")]

@@ -211,11 +211,22 @@ def lag1_of_series(series: np.ndarray, m: int, *, data_type: str, dmin: int, dma
         return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
                         lambda: _lag1_r1(diffs.at(d), acf, gaps))
 
-    theta = 1 if data_type == "phase" else 0
-    d, delta, r1 = _difference_until_white(r1_at, m, dmin, dmax)
-    alpha_est = -2.0 * (delta + d) + 2 * theta
-    alpha = -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta
+    d, delta, r1 = difference_until_white(r1_at, m, dmin, dmax)
+    alpha, alpha_est = lag1_alpha(d, delta, data_type)
     return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(n))
+
+
+def lag1_alpha(d: int, delta: float, data_type: str) -> tuple[int, float]:
+    """α (rounded) and its fractional estimate from the differences taken and δ = r1/(1 + r1):
+    ``α̂ = −2(δ + d) + 2θ``, θ = 1 for phase data, 0 for frequency data (numerics.md §5.2).
+
+    Examples
+    --------
+    >>> lag1_alpha(0, 0.5, "freq"), lag1_alpha(1, 0.25, "phase")
+    ((-1, -1.0), (0, -0.5))
+    """
+    theta = 1 if data_type == "phase" else 0
+    return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
 
 
 class _Differences:
@@ -265,7 +276,7 @@ def _analysis_series(series: np.ndarray, dtype: str, m: int, detrend: bool, min_
     return z
 
 
-def _difference_until_white(r1_at: Callable[[int], float], m: int, dmin: int, dmax: int) -> tuple[int, float, float]:
+def difference_until_white(r1_at: Callable[[int], float], m: int, dmin: int, dmax: int) -> tuple[int, float, float]:
     """Difference the series until δ = r1/(1 + r1) < 0.25 (within ``dmin``…``dmax``).
 
     ``r1_at(d)`` is the lag-1 autocorrelation of the series differenced d times.

@@ -23,7 +23,19 @@ from ...core.taus import long_factors_expected
 from ...errors import DataError
 from ...uncertainty.attach import attach
 from ...uncertainty.confidence import EDF_STATISTICS
+from ...uncertainty.lag1 import difference_until_white, lag1_alpha
 from .streams import _block_means, _Diff, _Raw, _Series, _strided, _with_history
+
+
+def _differences(batches: Callable[[], Iterator[np.ndarray]], dmax: int) -> Iterator[tuple[int, np.ndarray]]:
+    """``(d, z)``: the d-th differences (d = 0 … dmax) each batch adds, in stream order (empty ones skipped)."""
+    had = 0
+    for ext in _with_history(batches(), dmax):
+        for d in range(dmax + 1):
+            z = _new_values(ext, had, d)
+            if z.size:
+                yield d, z
+        had = min(dmax, ext.size)
 
 
 def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: int) -> tuple[list[float], list[float]]:
@@ -31,31 +43,13 @@ def _lag1_streamed(batches: Callable[[], Iterator[np.ndarray]], n: int, dmax: in
 
     Returns ``(den_d, num_d)`` with ``den = Σ (z - z̄)²`` and
     ``num = Σ (z_k - z̄)(z_{k+1} - z̄)`` (z̄ the mean of that difference series),
-    from two passes: means first, then the centred sums.
+    from two passes: means first, then the centred sums (:func:`_centred_sums`).
     """
     sums: list[list[float]] = [[] for _ in range(dmax + 1)]
-    had = 0
-    for ext in _with_history(batches(), dmax):
-        for d in range(dmax + 1):
-            sums[d].append(float(np.add.reduce(_new_values(ext, had, d))))
-        had = min(dmax, ext.size)
+    for d, z in _differences(batches, dmax):
+        sums[d].append(float(np.add.reduce(z)))
     means = [math.fsum(sums[d]) / (n - d) for d in range(dmax + 1)]
-    den: list[list[float]] = [[] for _ in range(dmax + 1)]
-    num: list[list[float]] = [[] for _ in range(dmax + 1)]
-    last: list[Optional[float]] = [None] * (dmax + 1)
-    had = 0
-    for ext in _with_history(batches(), dmax):
-        for d in range(dmax + 1):
-            zc = _new_values(ext, had, d) - means[d]
-            if zc.size == 0:
-                continue
-            den[d].append(float(np.einsum("i,i->", zc, zc)))
-            num[d].append(float(np.einsum("i,i->", zc[:-1], zc[1:])))
-            if last[d] is not None:
-                num[d].append(last[d] * float(zc[0]))
-            last[d] = float(zc[-1])
-        had = min(dmax, ext.size)
-    return [math.fsum(v) for v in den], [math.fsum(v) for v in num]
+    return _centred_sums(batches, dmax, means)
 
 
 def _present_sums(batches: Callable[[], Iterator[np.ndarray]], dmax: int) -> list[tuple[int, int, float]]:
@@ -65,40 +59,29 @@ def _present_sums(batches: Callable[[], Iterator[np.ndarray]], dmax: int) -> lis
     present = [0] * (dmax + 1)
     pairs = [0] * (dmax + 1)
     last_ok = [False] * (dmax + 1)
-    had = 0
-    for ext in _with_history(batches(), dmax):
-        for d in range(dmax + 1):
-            z = _new_values(ext, had, d)
-            if z.size == 0:
-                continue
-            ok = ~np.isnan(z)
-            sums[d].append(float(np.add.reduce(z[ok])))
-            present[d] += int(np.count_nonzero(ok))
-            pairs[d] += int(np.count_nonzero(ok[:-1] & ok[1:])) + int(last_ok[d] and ok[0])
-            last_ok[d] = bool(ok[-1])
-        had = min(dmax, ext.size)
+    for d, z in _differences(batches, dmax):
+        ok = ~np.isnan(z)
+        sums[d].append(float(np.add.reduce(z[ok])))
+        present[d] += int(np.count_nonzero(ok))
+        pairs[d] += int(np.count_nonzero(ok[:-1] & ok[1:])) + int(last_ok[d] and ok[0])
+        last_ok[d] = bool(ok[-1])
     return [(present[d], pairs[d], math.fsum(sums[d])) for d in range(dmax + 1)]
 
 
 def _centred_sums(batches: Callable[[], Iterator[np.ndarray]], dmax: int,
                   means: list[float]) -> tuple[list[float], list[float]]:
-    """Second pass: ``Σ zc²`` and ``Σ zc_k·zc_{k+1}`` of the d-th differences centred on the mean
-    of the points present, a missing point taken as 0 (so a pair with one adds nothing)."""
+    """Second pass: ``Σ zc²`` and ``Σ zc_k·zc_{k+1}`` of the d-th differences centred on ``means``,
+    a missing point (NaN) taken as 0, so a pair with one adds nothing; the pair across two
+    batches joins the last value of one to the first of the next."""
     den: list[list[float]] = [[] for _ in range(dmax + 1)]
     num: list[list[float]] = [[] for _ in range(dmax + 1)]
     last = [0.0] * (dmax + 1)
-    had = 0
-    for ext in _with_history(batches(), dmax):
-        for d in range(dmax + 1):
-            z = _new_values(ext, had, d)
-            if z.size == 0:
-                continue
-            zc = np.where(np.isnan(z), 0.0, z - means[d])
-            den[d].append(float(np.einsum("i,i->", zc, zc)))
-            num[d].append(float(np.einsum("i,i->", zc[:-1], zc[1:])))
-            num[d].append(last[d] * float(zc[0]))
-            last[d] = float(zc[-1])
-        had = min(dmax, ext.size)
+    for d, z in _differences(batches, dmax):
+        zc = np.where(np.isnan(z), 0.0, z - means[d])
+        den[d].append(float(np.einsum("i,i->", zc, zc)))
+        num[d].append(float(np.einsum("i,i->", zc[:-1], zc[1:])))
+        num[d].append(last[d] * float(zc[0]))
+        last[d] = float(zc[-1])
     return [math.fsum(v) for v in den], [math.fsum(v) for v in num]
 
 
@@ -128,20 +111,10 @@ def _lag1_gaps(batches: Callable[[], Iterator[np.ndarray]], m: int, dtype: str, 
 
 
 def _lag1_decision(r1_at: Callable[[int], float], m: int, dtype: str, dmax: int) -> tuple[int, float]:
-    """α and α̂ from the lag-1 autocorrelation ``r1_at(d)`` of the d-th differences, d = 0, 1, …,
-    by the rule of :func:`sigmatau.noiseid.lag1_acf_noise_id`: difference until δ = r1/(1 + r1)
-    falls below 0.25 (or d reaches ``dmax``); then α = −round(2δ) − 2d, plus 2 for phase data."""
-    theta = 1 if dtype == "phase" else 0
-    d = 0
-    while True:
-        r1 = r1_at(d)
-        if r1 <= -1.0:
-            raise DataError(f"lag-1 autocorrelation r1={r1!r} at m={m}, d={d}: the series alternates exactly")
-        delta = r1 / (1.0 + r1)
-        if delta < 0.25 or d >= dmax:
-            break
-        d += 1
-    return -int(np.rint(2.0 * delta)) - 2 * d + 2 * theta, -2.0 * (delta + d) + 2 * theta
+    """α and α̂ from the lag-1 autocorrelation ``r1_at(d)`` of the d-th differences, by the
+    in-memory rule itself (:func:`sigmatau.uncertainty.lag1.difference_until_white`)."""
+    d, delta, _ = difference_until_white(r1_at, m, 0, dmax)
+    return lag1_alpha(d, delta, dtype)
 
 
 def _new_values(ext: np.ndarray, had: int, d: int) -> np.ndarray:
