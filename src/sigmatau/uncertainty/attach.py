@@ -25,7 +25,7 @@ from .confidence import EDF_STATISTICS, deviation_interval, edf_array
 from ..errors import DataError, ParameterError
 from ..core.result import StabilityResult
 
-__all__ = ["CI_METHODS", "SINGLE_SIDED_EDF", "attach", "check_options"]
+__all__ = ["CI_METHODS", "DECISIVE_AVERAGES", "SINGLE_SIDED_EDF", "attach", "check_options", "edf_alpha"]
 
 CiMethod = Literal["chi2", "simple"]
 CI_METHODS = ("chi2", "simple", None)
@@ -40,6 +40,16 @@ _NO_INTERVAL = {
 }
 
 _ALPHA_RANGE = (-4, 2)
+
+#: Averages ⌊N/m⌋ from which one τ's identification alone sets the EDF. Below it the lag-1
+#: method calls white FM its whiter neighbour in over 1 % of records, and B1 (from 30
+#: averages down) in 15–28 %; a whiter type has a several times larger EDF, so such a row's
+#: interval would cover 57 % instead of 68 % (tests/test_confidence_mc.py, long-τ rows).
+DECISIVE_AVERAGES = 136
+
+#: Statistics whose noise type does not come from the per-τ identification (TheoBR's κ
+#: averages over the whole record) or which identify at another τ (the Theo family).
+_OWN_IDENTIFICATION = frozenset({"theo1", "theobr", "theoh"})
 
 
 def check_options(alpha: object, confidence: object, ci: object) -> tuple[Optional[int], float, Optional[str]]:
@@ -135,12 +145,12 @@ def attach(
     known = np.isfinite(a)
     nu = np.full(n_rows, np.nan)
     edf_reasons = list(reasons)
+    a_lo = a if alpha is not None or result.statistic in _OWN_IDENTIFICATION else edf_alpha(result, a)
     if not has_edf:
         edf_reasons = [f"no published EDF for {result.statistic}"] * n_rows
     elif known.any():
         for rows, n_points in _rows_by_points(result, known):
-            vals, why = edf_array(result.statistic, a[rows].astype(np.int64), result.m[rows],
-                                  n_points, return_reason=True, unsupported="nan")
+            vals, why = _least_edf(result, a, a_lo, rows, n_points)
             nu[rows] = vals
             for i, w in zip(rows, why):
                 edf_reasons[i] = w
@@ -174,6 +184,72 @@ def attach(
         confidence=confidence,
         ci_reason=tuple(edf_reasons),
     )
+
+
+def edf_alpha(result: StabilityResult, alpha: np.ndarray) -> np.ndarray:
+    """Noise type the EDF of each row is computed for: the identified α, or, on a row with
+    fewer than :data:`DECISIVE_AVERAGES` averages, the reddest α identified at that τ or a
+    shorter one.
+
+    ``α_edf(m) = min(α(m), min{α(m') : m' < m})`` where ``⌊N/m⌋ < 136`` or ``α(m) = 2``,
+    else ``α(m)`` (white PM after flicker PM is the lag-1 method's bias, not chance).
+
+    The dominant type of a sum of power-law noises can only redden as τ grows (each term's
+    AVAR goes as τ^(−α−1)), so a whiter type at a longer τ is either a real change of the
+    process (a servo loop, a disciplined oscillator) or a misidentification. With few
+    averages the second is common, and it is the costly one: a whiter type has a larger EDF
+    (OADEV at m = 4096 of 32768 points: ν = 110 for flicker PM against 9.8 for white FM), so
+    the interval is far too narrow. Taking the redder type gives the narrower-EDF, wider
+    interval, which covers in both cases. The reported α (the Stable32 Alpha column) is
+    unchanged; only the EDF and interval use ``α_edf``, and ``ci_reason`` says so.
+
+    Parameters
+    ----------
+    result : StabilityResult
+        Its ``m`` and record length (``n_points``, or per row ``n_effective`` with gaps).
+    alpha : numpy.ndarray
+        Identified α per row (NaN where none).
+
+    Returns
+    -------
+    numpy.ndarray
+        α for the EDF, NaN where ``alpha`` is NaN.
+    """
+    points = np.asarray(result.n_points if result.n_effective is None else result.n_effective, dtype=float)
+    # White PM is never decisive after flicker PM: decimated flicker PM reads white to the
+    # lag-1 method whatever the number of averages (43 % of records at 2048 averages,
+    # 71 % at 256; test_confidence_mc.py), so only a redder type at a shorter τ counts.
+    weak = (np.floor(points / np.maximum(result.m, 1)) < DECISIVE_AVERAGES) | (np.asarray(alpha) == 2)
+    out = np.array(alpha, dtype=float, copy=True)
+    known = np.isfinite(out)
+    for i in np.flatnonzero(known & weak):
+        shorter = known & (result.m < result.m[i])
+        if shorter.any():
+            out[i] = min(out[i], float(np.min(np.asarray(alpha, dtype=float)[shorter])))
+    return out
+
+
+def _least_edf(result: StabilityResult, alpha: np.ndarray, alpha_lo: np.ndarray, rows: np.ndarray,
+               n_points: int) -> tuple[np.ndarray, list[str]]:
+    """EDF of each row (and its reason): that of α, or where ``alpha_lo < alpha`` the smallest
+    EDF over the types from ``alpha_lo`` to α — the widest interval the data cannot rule out
+    (the EDF is not monotone in α for every statistic: HDEV's at few averages is not)."""
+    nu, why = edf_array(result.statistic, alpha[rows].astype(np.int64), result.m[rows], n_points,
+                        return_reason=True, unsupported="nan")
+    nu = np.array(nu, dtype=float)
+    why = list(why)
+    for k, i in enumerate(rows):
+        if not (alpha_lo[i] < alpha[i] and math.isfinite(nu[k])):
+            continue  # no type to weigh, or none defined for the identified one (TOTDEV WPM)
+        for cand in range(int(alpha_lo[i]), int(alpha[i])):
+            v, w = edf_array(result.statistic, np.array([cand]), result.m[i:i + 1], n_points,
+                             return_reason=True, unsupported="nan")
+            if math.isfinite(v[0]) and not w[0] and not v[0] >= nu[k]:
+                nu[k] = float(v[0])
+                why[k] = (f"EDF for alpha={cand}, a redder noise type than the one identified here"
+                          f" (alpha={int(alpha[i])}) and seen at this or a shorter tau: too few averages"
+                          " here to rule it out")
+    return nu, why
 
 
 def _rows_by_points(result: StabilityResult, rows: np.ndarray) -> list[tuple[np.ndarray, int]]:
