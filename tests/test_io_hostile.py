@@ -287,6 +287,44 @@ def test_200_kB_line_in_the_data_is_refused_with_its_line_number(tmp_path, capsy
     assert_one_line_error((code, err), code=1, match="line 301")
 
 
+@pytest.mark.parametrize("sep", [",", ";", "\t", " "])
+def test_a_data_line_with_more_fields_than_the_header_is_refused(tmp_path, capsys, sep):
+    """Defect: numpy's loadtxt reads only the columns asked for, so a line with an extra
+    value (a field split in two, a lost line break) was kept, its values most likely shifted."""
+    text, _ = _table("t,gyro_x,gyro_y,gyro_z", n=500)
+    lines = [ln.replace(",", sep) for ln in text.splitlines()]
+    lines[300] += f"{sep}7"  # file line 301
+    p = _write(tmp_path / "extra.csv", "\n".join(lines) + "\n")
+    with pytest.raises(DataError) as e:
+        io.read(p)
+    _check(e, DataError, "extra.csv", "line 301 has 5 fields, expected 4")
+    code, _, err = _cli(["stats", p, "--stat", "oadev"], capsys)
+    assert_one_line_error((code, err), code=1, match="line 301 has 5 fields")
+
+
+def test_empty_trailing_fields_are_not_extra_values(tmp_path):
+    text, v = _table("t,gyro_x,gyro_y,gyro_z", n=500)
+    lines = text.splitlines()
+    lines[300] += ","
+    lines[301] += ",,"
+    log = io.read(_write(tmp_path / "trailing.csv", "\n".join(lines) + "\n"))
+    np.testing.assert_array_equal(log.as_array(), v)
+
+
+@pytest.mark.slow
+def test_an_extra_field_is_refused_on_the_fast_csv_path_too(tmp_path):
+    """Files over 16 MiB go through pyarrow's reader first, which gives way to the reference."""
+    rng = np.random.default_rng(3)
+    n = 400_000
+    a = rng.normal(size=(n, 2))
+    rows = [f"{0.01 * i:.2f},{a[i, 0]:.17f},{a[i, 1]:.17f}" for i in range(n)]
+    rows[300_000] += ",5"
+    p = _write(tmp_path / "big.csv", "t,gyro_x,gyro_y\n" + "\n".join(rows) + "\n")
+    assert p.stat().st_size > 16 << 20
+    with pytest.raises(DataError, match="line 300002 has 4 fields, expected 3"):
+        io.read(p)
+
+
 def test_200_kB_quoted_header_field_is_read(tmp_path):
     """A header whose quoted name is longer than the csv module's field limit: read, and the
     column named in the warning of unused columns (cut short)."""

@@ -304,6 +304,7 @@ def _read_rows(path: Path, display: str, opts: Options, progress: Progress, hash
             break
         _check_lengths(lines, line_no, display)
         arr = _parse_chunk(lines, line_no, sniff, usecols, dtype, quoted, int_time, display)
+        _check_no_extra_fields(lines, line_no, sniff, display)
         m = arr.shape[0]
         if n + m > capacity:
             capacity = max(int(capacity * 1.6), n + m)
@@ -378,6 +379,22 @@ def _fast_rows(path: Path, display: str, progress: Progress, head: list[str], st
         return None
     _arrowcsv.last_outcome = "fast"
     return buf, tbuf, n, reader
+
+
+def _check_no_extra_fields(lines: list[str], first: int, sniff: _Sniff, display: str) -> None:
+    """Refuse a data line with more fields than the header: numpy's loadtxt reads only the columns
+    asked for and would keep the line, although its values are most likely shifted (a field
+    split in two, a missing line break). Empty trailing fields (``1,2,3,``) are not values."""
+    d = sniff.delimiter
+    want = sniff.ncols
+    for k, line in enumerate(lines):
+        if d is not None and line.count(d) < want:
+            continue  # the common case, one str.count per line: too few delimiters to exceed
+        s = _strip_comment(line).strip()
+        fields = _split(s, d) if s else []
+        if len(fields) > want and any(f.strip() for f in fields[want:]):
+            raise DataError(f"{display}: line {first + k} has {len(fields)} fields, expected {want}"
+                            " (more values than the header names)")
 
 
 def _parse_chunk(lines: list[str], line_no: int, sniff: _Sniff, usecols: list[int], dtype: np.dtype,
