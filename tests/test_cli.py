@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import cli_error_line, run_cli
+from helpers import assert_one_line_error, cli_error_line, run_cli
 
+import sigmatau
 from sigmatau import __version__
 from sigmatau.cli import main
 from sigmatau.units import convert
@@ -697,3 +698,26 @@ def test_kalibr_from_fewer_than_three_axes_says_so(imu_csv, tmp_path, capsys):
     text = (out / "imu.yaml").read_text()
     assert "fewer than three axes: gyroscope from 2 of 3 axes (gyro_x, gyro_y)" in text
     assert "accelerometer from" not in text
+
+
+def test_stats_theo1_bias_published_is_the_api_correction(tmp_path, capsys):
+    """``--theo1-bias published`` gives sigmatau.theo1(..., bias="published"): Theo1 divided by
+    Howe & Tasset's AVAR/Theo1 ratio of the type identified at each τ (raw by default)."""
+    x = sigmatau.power_law_noise(4000, 2, data_type="phase", rng=np.random.default_rng(7)) * 1e-9
+    path = tmp_path / "wpm.txt"
+    np.savetxt(path, x)
+    rows = {}
+    for bias in ("none", "published"):
+        code, out, _ = run_cli(["stats", path, "--data-type", "phase", "--rate", "1", "--stat", "theo1",
+                                "--theo1-bias", bias], capsys)
+        assert code == 0
+        rows[bias] = [ln.split() for ln in out.splitlines() if ln.strip()[:1].isdigit()]
+        assert ("corrected for its bias" in out) == (bias == "published")
+    for bias, table in rows.items():
+        want = sigmatau.theo1(x, rate=1.0, data_type="phase", bias=bias)
+        assert [int(r[0]) for r in table] == want.m.tolist()
+        np.testing.assert_allclose([float(r[5]) for r in table], want.dev, rtol=5e-5)  # 5 printed digits
+    assert float(rows["published"][0][5]) < 0.9 * float(rows["none"][0][5])  # white PM: AVAR < Theo1
+    code, _, err = run_cli(["stats", path, "--data-type", "phase", "--rate", "1", "--stat", "theo1",
+                            "--theo1-bias", "auto"], capsys)
+    assert_one_line_error((code, err), code=2, match="--theo1-bias")

@@ -194,6 +194,9 @@ def _add_analysis_options(p: argparse.ArgumentParser, default_stats: str, theoh:
     g.add_argument("--theoh", choices=["fast", "exact"], default=theoh,
                    help=f"TheoH's TheoBR rows: fast (Fast TheoBR on block averages above 65,536 points, unless"
                         f" κ indicates phase noise) or exact (default {theoh}; docs/theoh-fast.md)")
+    g.add_argument("--theo1-bias", choices=["none", "published"], default="none",
+                   help="Theo1 raw (default, as Stable32 prints it with Alpha 0) or divided by Howe & Tasset's"
+                        " AVAR/Theo1 bias of the noise type identified at each τ (published)")
     pr = p.add_argument_group("preparation (applied to every channel in this order; docs/prep.md)")
     pr.add_argument("--part", metavar="START:END",
                     help="keep this time range, seconds from the first sample (either side may be empty)")
@@ -502,7 +505,8 @@ def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Pa
         analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
                                model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
                                rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
-                               progress=display.line, theoh=args.theoh, on_step=display.event,
+                               progress=display.line, theoh=args.theoh, theo1_bias=args.theo1_bias,
+                               on_step=display.event,
                                prep=_preparation(args), dynamic=_dynamic_spec(args),
                                gauss_markov=args.gauss_markov)
     finally:

@@ -34,10 +34,12 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
         return _stats_chunked(args)
     log = _read(args, console)
     a = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence, model=False,
-                    workers=args.workers, progress=console.progress, theoh=args.theoh, prep=_preparation(args),
+                    workers=args.workers, progress=console.progress, theoh=args.theoh, theo1_bias=args.theo1_bias,
+                    prep=_preparation(args),
                     dynamic=_dynamic_spec(args))
+    corrected = ", Theo1 corrected for its bias (published)" if args.theo1_bias == "published" else ""
     _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
-                                  f" data, {a.settings['confidence']:.2%} intervals")
+                                  f" data, {a.settings['confidence']:.2%} intervals{corrected}")
     for w in a.warnings:
         _say(f"sigmatau: warning: {w}", err=True)
     return EXIT_OK

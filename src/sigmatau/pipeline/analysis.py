@@ -242,7 +242,7 @@ def _no_step(step: str, done: bool) -> None:
 
 def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confidence: float,
              reference: Mapping[str, Mapping[str, tuple[float, str]]], model_wanted: bool,
-             theoh: str = "fast", step: Callable[[str, bool], None] = _no_step,
+             options: Optional[Mapping[str, Mapping[str, Any]]] = None, step: Callable[[str, bool], None] = _no_step,
              dynamic_spec: Optional[tuple[float, float]] = None, gauss_markov: str = "auto") -> ChannelAnalysis:
     from ..imu import model as imu
     from ..imu.units import sensor_unit
@@ -280,7 +280,7 @@ def _channel(log: Any, name: str, statistics: tuple[str, ...], taus: Any, confid
     skipped: dict[str, str] = {}
     for stat in statistics:
         step(stat, False)
-        _statistic(stat, x, log, taus, confidence, theoh, model, results, skipped)
+        _statistic(stat, x, log, taus, confidence, (options or {}).get(stat, {}), model, results, skipped)
         step(stat, True)
     rows: tuple[dict, ...] = ()
     if model is not None and reference.get(group):
@@ -321,9 +321,10 @@ def _dynamic(x: np.ndarray, log: Any, spec: tuple[float, float], confidence: flo
         return None, str(exc)
 
 
-def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float, theoh: str, model: Any,
-               results: dict[str, StabilityResult], skipped: dict[str, str]) -> None:
-    """Compute one statistic of a channel into ``results`` (or its reason into ``skipped``)."""
+def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float, extra: Mapping[str, Any],
+               model: Any, results: dict[str, StabilityResult], skipped: dict[str, str]) -> None:
+    """Compute one statistic of a channel into ``results`` (or its reason into ``skipped``), with
+    ``extra`` keywords for its function (TheoH's ``method``, Theo1's ``bias``)."""
     if stat == "oadev" and model is not None:
         results[stat] = model.result  # the very curve the model was fitted on
         return
@@ -332,7 +333,6 @@ def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float,
         if derived is not None:
             results[stat] = derived
             return
-    extra = {"method": theoh} if stat == "theoh" else {}
     try:
         results[stat] = FUNCTIONS[stat](x, rate=log.rate, data_type=log.data_type, taus=taus,
                                         confidence=confidence, **extra)
@@ -422,6 +422,7 @@ def analyze_log(
     prep: Optional[Preparation] = None,
     dynamic: Optional[tuple[float, float]] = None,
     gauss_markov: str = "auto",
+    theo1_bias: str = "none",
 ) -> LogAnalysis:
     """Compute the statistics, noise types and IMU model of every channel of a log.
 
@@ -467,6 +468,10 @@ def analyze_log(
         ``"fast"`` (default) uses Fast TheoBR on block averages above 65,536
         phase points, unless κ indicates phase noise; ``"exact"`` the definition.
         docs/theoh-fast.md gives the difference.
+    theo1_bias : {"none", "published"}
+        Theo1 raw (default, as Stable32 prints it with Alpha forced to 0) or divided by
+        Howe & Tasset's AVAR/Theo1 bias of the noise type identified at each τ
+        (:func:`sigmatau.theo1` ``bias``).
     prep : Preparation, optional
         Steps applied to every channel first, in the order part → outliers → drift →
         average (:mod:`sigmatau.pipeline.prepare`); each channel's records of them are in
@@ -498,6 +503,8 @@ def analyze_log(
         raise ParameterError(f"confidence={confidence!r} must be a number between 0 and 1")
     if theoh not in ("fast", "exact"):
         raise ParameterError(f"theoh={theoh!r} must be 'fast' or 'exact'")
+    if theo1_bias not in ("none", "published"):
+        raise ParameterError(f"theo1_bias={theo1_bias!r} must be 'none' or 'published'")
     if gauss_markov not in ("auto", "never", "always"):
         raise ParameterError(f"gauss_markov={gauss_markov!r} must be 'auto', 'never' or 'always'")
     reference = datasheet_reference(datasheet)
@@ -509,8 +516,9 @@ def analyze_log(
     notes.extend(prepared.notes)
     names = _channel_names(log, channels)
     workers = _worker_count(workers, len(names), max((log[n].nbytes for n in names), default=0))
+    options = {"theoh": {"method": theoh}, "theo1": {"bias": theo1_bias}}
     done, seen = _analyse_channels(log, names, stats, taus, float(confidence), reference, model, workers, progress,
-                                   theoh, on_step, dynamic, gauss_markov)
+                                   options, on_step, dynamic, gauss_markov)
     done = [_with_raw(dataclasses.replace(c, prep=prepared.records.get(c.name, ())), prepared.raw, log, taus,
                       float(confidence)) for c in done]
     kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
@@ -518,7 +526,7 @@ def analyze_log(
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
                 "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
                 "datasheet": {g: {t: list(v) for t, v in terms.items()} for g, terms in reference.items()},
-                "workers": workers, "theoh": theoh,
+                "workers": workers, "theoh": theoh, "theo1_bias": theo1_bias,
                 "prep": {k: v for k, v in dataclasses.asdict(prep).items() if v is not None} if prep else {},
                 "dynamic": None if dynamic is None else [float(v) for v in dynamic], "gauss_markov": gauss_markov}
     return LogAnalysis(log=log, channels=tuple(done), settings=settings, kalibr=kalibr, kalibr_note=kalibr_note,
@@ -593,7 +601,8 @@ def available_memory() -> Optional[float]:
 def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: Any, confidence: float,
                       reference: Mapping[str, Mapping[str, tuple[float, str]]], model: bool, workers: int,
                       progress: Optional[Callable[[str], None]],
-                      theoh: str = "fast", on_step: Optional[Callable[[StepEvent], None]] = None,
+                      options: Optional[Mapping[str, Mapping[str, Any]]] = None,
+                      on_step: Optional[Callable[[StepEvent], None]] = None,
                       dynamic: Optional[tuple[float, float]] = None, gauss_markov: str = "auto",
                       ) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
@@ -610,7 +619,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
         # The statistics and the model of a channel share its validated samples, phase and
         # noise identification (computed once instead of once per statistic).
         with shared_record(log[name]):
-            ch = _channel(log, name, stats, taus, confidence, reference, model, theoh, step, dynamic, gauss_markov)
+            ch = _channel(log, name, stats, taus, confidence, reference, model, options, step, dynamic, gauss_markov)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
         return ch
