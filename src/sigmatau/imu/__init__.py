@@ -6,7 +6,8 @@ the result types (``results``, ``noisemodel``), part presets (``presets``),
 simulation (``simulation``), read-offs (``readoffs``), the weighted fit and its
 intervals (``fitting``), the first-order Gauss–Markov term chosen against the five
 terms by BIC (``gaussmarkov``), ``analyze`` itself (``extraction``), the design tip's
-answers (``answers``), Kalibr values (``kalibr``); units and conversions
+answers (``answers``), Kalibr values (``kalibr``), how long a record must still run
+(``advice``, with its forecast of the fit on a longer record in ``forecast``); units and conversions
 (``units``); data checks of samples (``checks``) and timestamps
 (``timestamps``). What it may import: the statistics, uncertainty, noise and
 core layers; never I/O, reports, the scale-out layer or the CLI.

@@ -114,12 +114,14 @@ This module is the facade of the model; the code is split by responsibility:
 :mod:`~sigmatau.imu.extraction` (:func:`analyze`, :func:`from_curve`),
 :mod:`~sigmatau.imu.noisemodel` (:class:`NoiseModel`,
 :func:`optimal_averaging`), :mod:`~sigmatau.imu.answers`
-(:func:`angle_error`) and :mod:`~sigmatau.imu.kalibr`
-(:func:`kalibr_config`).
+(:func:`angle_error`), :mod:`~sigmatau.imu.kalibr`
+(:func:`kalibr_config`) and :mod:`~sigmatau.imu.advice` (:func:`recording_advice`: how
+long a record must still run, from :mod:`~sigmatau.imu.forecast`).
 """
 
 from __future__ import annotations
 
+from .advice import RecordingAdvice, TermAdvice, recording_advice
 from .answers import angle_error
 from .extraction import DEVIATION_RANGE, analyze, from_curve
 from .gaussmarkov import gauss_markov_avar
@@ -153,4 +155,7 @@ __all__ = [
     "optimal_averaging",
     "kalibr_config",
     "B_FACTOR",
+    "recording_advice",
+    "RecordingAdvice",
+    "TermAdvice",
 ]
