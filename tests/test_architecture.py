@@ -15,7 +15,7 @@ import sigmatau
 
 PACKAGE = Path(sigmatau.__file__).parent
 SUBPACKAGES = {"core", "uncertainty", "stats", "noise", "prep", "spectral", "compare", "imu", "io", "pipeline", "report",
-               "scale", "cli", "compat"}
+               "scale", "cli", "compat", "stream"}
 #: The public paths users import (README, docs, ``sigmatau.__all__``), kept at the top.
 ENTRY_POINTS = {"__init__", "__main__", "_version", "errors", "analysis", "batch", "checks", "chunked",
                 "confidence", "datasets", "filterchain", "generate", "noiseid", "outputs", "plots", "units"}
