@@ -721,3 +721,17 @@ def test_stats_theo1_bias_published_is_the_api_correction(tmp_path, capsys):
     code, _, err = run_cli(["stats", path, "--data-type", "phase", "--rate", "1", "--stat", "theo1",
                             "--theo1-bias", "auto"], capsys)
     assert_one_line_error((code, err), code=2, match="--theo1-bias")
+
+
+@pytest.mark.parametrize("chunked", [False, True])
+def test_stats_header_counts_the_missing_samples(tmp_path, capsys, chunked):
+    y = np.random.default_rng(11).normal(size=20_000)
+    y[5000:5100] = np.nan
+    np.save(tmp_path / "gap.npy", y)
+    argv = ["stats", tmp_path / "gap.npy", "--rate", "100", "--stat", "oadev"] + (["--chunked"] if chunked else [])
+    code, out, _ = run_cli(argv, capsys)
+    assert code == 0
+    assert out.splitlines()[0].startswith(f"{tmp_path / 'gap.npy'}: 20,000 samples (100 missing, NaN: gaps) at 100 Hz")
+    np.save(tmp_path / "full.npy", np.nan_to_num(y))
+    code, out, _ = run_cli(["stats", tmp_path / "full.npy", "--rate", "100", "--stat", "oadev"], capsys)
+    assert "missing" not in out.splitlines()[0]

@@ -38,8 +38,10 @@ def _cmd_stats(args: argparse.Namespace, console: _Console) -> int:
                     prep=_preparation(args),
                     dynamic=_dynamic_spec(args))
     corrected = ", Theo1 corrected for its bias (published)" if args.theo1_bias == "published" else ""
-    _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples at {log.rate:.6g} Hz, {log.data_type}"
-                                  f" data, {a.settings['confidence']:.2%} intervals{corrected}")
+    missing = max((r.n_missing for ch in a.channels for r in ch.results.values()), default=0)
+    gaps = f" ({missing:,} missing, NaN: gaps)" if missing else ""
+    _emit_stats(args, a.channels, f"{log.source.path}: {len(log):,} samples{gaps} at {log.rate:.6g} Hz,"
+                                  f" {log.data_type} data, {a.settings['confidence']:.2%} intervals{corrected}")
     for w in a.warnings:
         _say(f"sigmatau: warning: {w}", err=True)
     return EXIT_OK
@@ -68,7 +70,9 @@ def _stats_chunked(args: argparse.Namespace) -> int:
     n = first.n_points - (1 if dtype == "freq" else 0)
     name = Path(args.log).stem
     ch = ChannelAnalysis(name=name, group=dtype, unit="", n_samples=n, results=results, skipped={})
-    _emit_stats(args, [ch], f"{args.log}: {n:,} samples at {args.rate:.6g} Hz, {dtype} data, read in chunks,"
+    missing = first.n_missing
+    gaps = f" ({missing:,} missing, NaN: gaps)" if missing else ""
+    _emit_stats(args, [ch], f"{args.log}: {n:,} samples{gaps} at {args.rate:.6g} Hz, {dtype} data, read in chunks,"
                             f" {args.confidence:.2%} intervals")
     return EXIT_OK
 
