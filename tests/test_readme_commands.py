@@ -71,7 +71,12 @@ COMPARE_TOUR = [
 ]
 COMPARE_LOGS = "sigmatau compare a.csv b.csv c.csv --columns gyro_z"
 STABLE32_OUT = "sigmatau simulate clock.dat --h 'h0=1e-22' --data-type phase --duration 10000"
-EXERCISED = {DEMO, *TOUR, EXPORT, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT}
+WATCH = [
+    "sigmatau simulate imu.csv --preset lsm6dsl --duration 600",
+    "sigmatau watch imu.csv --serve --until-idle 2 --out imu-live --no-figures",
+]
+EXERCISED = {DEMO, *TOUR, EXPORT, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT,
+             *WATCH}
 
 
 def test_every_readme_command_is_exercised():
@@ -162,7 +167,26 @@ def test_readme_stable32_output(tmp_path):
     assert len(values) == 10_000
 
 
-@pytest.mark.parametrize("command", ["demo", "analyze", "stats", "compare", "psd", "simulate", "batch"])
+def test_readme_watch(tmp_path):
+    """The README's watch example: a finished log, followed until 2 s without growth, the live page
+    served on 127.0.0.1, then the same outputs as ``sigmatau analyze``."""
+    for cmd in WATCH:
+        r = _ok(cmd, tmp_path)
+    assert "live view at http://127.0.0.1:" in r.stderr
+    out = tmp_path / "imu-live"
+    assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} <= {p.name for p in out.iterdir()}
+    _ok("sigmatau analyze imu.csv --out imu-ref --no-figures", tmp_path)
+    live = json.loads((out / "results.json").read_text())["channels"]
+    ref = json.loads((tmp_path / "imu-ref" / "results.json").read_text())["channels"]
+    assert [c["name"] for c in live] == [c["name"] for c in ref]
+    for a, b in zip(live, ref):
+        assert a["statistics"].keys() == b["statistics"].keys()
+        for stat, r in a["statistics"].items():
+            np.testing.assert_allclose(r["dev"], b["statistics"][stat]["dev"], rtol=1e-12, atol=0)
+            assert r["alpha"] == b["statistics"][stat]["alpha"]
+
+
+@pytest.mark.parametrize("command", ["demo", "analyze", "stats", "compare", "psd", "simulate", "batch", "watch"])
 def test_readme_help(tmp_path, command):
     r = _ok(HELP.replace("COMMAND", command), tmp_path, timeout=120)
     assert "examples:" in r.stdout and "exit codes" in r.stdout

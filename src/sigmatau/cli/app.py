@@ -24,7 +24,7 @@ from .common import (
     EXIT_DATA, EXIT_INTERNAL, EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE, _Console,
     _EPILOG_ERRORS, _Formatter, _Parser, _Terminated, _UsageError, _on_sigterm, _say, _showwarning,
 )
-from . import analyze, batch, compare, demo, psd, simulate, stats
+from . import analyze, batch, compare, demo, psd, simulate, stats, watch
 
 __all__ = ["main"]
 
@@ -45,12 +45,13 @@ def _parser() -> argparse.ArgumentParser:
               sigmatau compare a.csv b.csv c.csv --columns gyro_z --out hat
               sigmatau psd imu.csv --out imu-psd
               sigmatau simulate imu.csv --preset lsm6dsl --duration 3600
+              sigmatau watch imu.csv --serve                σ–τ live while the log is written
             """) + _EPILOG_ERRORS,
     )
     parser.add_argument("--version", action="version", version=f"sigmatau {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
 
-    for command in (demo, analyze, stats, compare, psd, simulate, batch):  # the order of `sigmatau --help`
+    for command in (demo, analyze, stats, compare, psd, simulate, batch, watch):  # the order of `sigmatau --help`
         command.add_cli(sub)
     return parser
 
