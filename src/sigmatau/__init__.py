@@ -32,7 +32,6 @@ from .core.result import StabilityResult
 from .stats.theo import theo1, theobr, theobr_kappa, theoh
 from .stats.tie import mtie, tierms
 from .stats.total import htotdev, mtotdev, totdev, ttotdev
-from .stream import Stream
 
 __all__ = [
     "__version__",
@@ -40,8 +39,6 @@ __all__ = [
     "stdev", "ostdev", "adev", "oadev", "mdev", "tdev", "hdev", "ohdev", "mhdev", "ldev", "pdev",
     "totdev", "mtotdev", "ttotdev", "htotdev", "mhtotdev", "theo1", "theobr", "theoh", "mtie", "tierms",
     "theobr_kappa", "compute_channels",
-    # statistics of a record still being recorded, chunk by chunk
-    "Stream",
     # comparing devices (covariances, cornered hats) and the frequency domain
     "compare", "gcodev", "three_cornered_hat", "cornered_hat",
     "spectral", "psd", "spectrum_to_sigma", "rms_jitter", "deadtime_correction",
