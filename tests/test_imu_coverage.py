@@ -165,10 +165,12 @@ def test_grid_coverage(config):
     docstring for the measured figures).
 
     Measured at commit time: holds for Q+N, N+B, N+B+K, N+K+R; not for N+B+K+R,
-    the dropped K's bound holding in 66 of 101 runs (nominal 84 %): the selection
-    drops K in the runs where it came out low. That gap is open (issue 11 note) and
-    listed in ``KNOWN_OPEN``: the test asserts that the failing statements are exactly
-    the known ones, so a new failure, or the known one fixed, both fail it."""
+    the dropped K's bound holding in 69 of 101 runs (66 before the redder-type EDF rule
+    of the OADEV points; nominal 84 %): the selection drops K in the runs where it came
+    out low. That gap is open (issue 11 note) and listed in ``KNOWN_OPEN``: the test
+    asserts that no other statement fails and that the known one is still more than 5
+    points short (69/101 sits on the edge of the band's three standard errors), so a new
+    failure, or the known one fixed, both fail it."""
     runs = 200
     table: dict = {}
     for seed in range(runs):
@@ -184,7 +186,14 @@ def test_grid_coverage(config):
             se = math.sqrt(p0 * (1 - p0) / n)
             if abs(rate - p0) > 0.05 + 3 * se:
                 failures.append((t, kind, k, n))
-    assert {(t, kind) for t, kind, _, _ in failures} == KNOWN_OPEN.get(config, set()), failures
+    known = KNOWN_OPEN.get(config, set())
+    assert {(t, kind) for t, kind, _, _ in failures} <= known, failures
+    for t, kind in known:
+        # Still open: below nominal by more than the ±5-point target (measured 65–68 %
+        # against 84 %, on the edge of the band's three standard errors). Once within
+        # ±5 points, this entry goes.
+        n, k = table[(t, "fit", kind)]
+        assert k / n < _nominal(kind) - 0.05, (t, kind, k, n)
 
 
 def test_b_readoff_unbiased_between_n_and_k_fast():
