@@ -40,7 +40,7 @@ from typing import Optional
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent
 sys.path.insert(0, str(HERE))
-from run import _git, machine_info, md_table, write_atomic  # noqa: E402  (bench/run.py)
+from run import _git, _version, machine_info, md_table, write_atomic  # noqa: E402  (bench/run.py)
 
 CHANNELS = ("gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z")
 UNITS = {"gyro": "rad/s", "accel": "m/s^2"}
@@ -359,6 +359,9 @@ def main(argv: Optional[list[str]] = None) -> int:
     machine = machine_info()
     machine["load_average_start"] = " ".join(f"{v:.2f}" for v in os.getloadavg())
     machine["sigmatau_commit"] = _git("rev-parse", "HEAD")[:12] or machine["sigmatau_commit"]
+    # The compiled kernels (extra `fast`) run when numba imports, unless SIGMATAU_NUMBA=0.
+    machine["numba"] = _version("numba")
+    machine["SIGMATAU_NUMBA"] = os.environ.get("SIGMATAU_NUMBA", "unset")
     state = {"machine": machine, "rows": [], "allan": {}, "argv": argv, "done": False, "seed": args.seed,
              "data": str(args.data)}
     for e in logs:

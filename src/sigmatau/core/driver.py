@@ -21,9 +21,10 @@ from .validate import (
     as_series, check_data_type, check_rate, remove_linear_phase, scale_to_unit, to_phase, unscale_variance,
 )
 from ..errors import DataError, ParameterError, RangeWarning, caller_stacklevel
+from .accel import fused_for
 from .gaps import GapKernel, detrended_phase, missing_mask, pooled_over_runs, present_runs
 from .result import StabilityResult
-from .shared import derived
+from .shared import derived, memoized
 from .taus import select_m
 
 __all__ = [
@@ -187,6 +188,9 @@ def _phase_from(trend_invariant: bool, series: np.ndarray, rate: float, dtype: s
     if not trend_invariant:
         return to_phase(series, rate, dtype)
     if dtype == "freq":
+        fast = fused_for(series.size)
+        if fast is not None:  # the same values, without the record-sized centred copy
+            return fast.phase_of_freq(series, _mean(series), rate)
         return to_phase(series - series.mean(), rate, dtype)
     return remove_linear_phase(series)
 
@@ -322,9 +326,10 @@ def compute(
     given = series
     missing = missing_mask(series)
     use_freq = dtype == "freq" and stat.compute_freq is not None
+    kernel = stat.compute_freq if use_freq else stat.compute
     if missing is None:  # with gaps, _with_gaps prepares the samples itself
         if use_freq:
-            series = series - series.mean() if stat.trend_invariant else series
+            kernel, series = _freq_kernel(stat, series)
         else:
             series = _phase_of(stat, series, rate_f, dtype)
     ms = select_m(
@@ -341,7 +346,6 @@ def compute(
         tau_factor=stat.tau_factor,
     )
     tau0 = 1.0 / rate_f
-    kernel = stat.compute_freq if use_freq else stat.compute
     n_eff = None
     if missing is not None:
         var, n, n_eff = _with_gaps(stat, series, missing, rate_f, dtype, ms)
@@ -368,6 +372,29 @@ def compute(
     if missing is not None:
         result = replace(result, n_missing=int(np.count_nonzero(missing)), n_effective=n_eff)
     return result, given
+
+
+def _freq_kernel(stat: Statistic, series: np.ndarray) -> tuple[Kernel, np.ndarray]:
+    """``stat.compute_freq`` and the samples it takes (mean removed when the statistic ignores it).
+
+    A kernel with a compiled twin (:func:`sigmatau.core.accel.twin`) chosen for this record
+    removes the mean in its loop: the samples go unchanged, and no centred copy of the record
+    is made.
+    """
+    kernel = stat.compute_freq
+    assert kernel is not None
+    name = getattr(kernel, "fused_name", None)
+    fast = fused_for(series.size) if name is not None else None
+    if fast is not None:
+        mean = _mean(series) if stat.trend_invariant else 0.0
+        compiled = getattr(fast, name)
+        return (lambda y, ms, tau0: compiled(y, ms, tau0, mean=mean)), series
+    return kernel, (series - series.mean() if stat.trend_invariant else series)
+
+
+def _mean(series: np.ndarray) -> float:
+    """``series.mean()``, once per record in a shared scope (each frequency statistic removes it)."""
+    return memoized(series, ("mean",), lambda: float(series.mean()))
 
 
 def _with_gaps(stat: Statistic, series: np.ndarray, missing: np.ndarray, rate: float, dtype: str,

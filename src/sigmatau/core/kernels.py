@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .accel import twin
 from .driver import Statistic
 from .gaps import block_kernel, point_kernel, window_mean_kernel
 from .taus import STOP_RATIOS
@@ -67,6 +68,7 @@ def _avar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("oavar_phase")
 def oavar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
@@ -91,6 +93,7 @@ def _mvar_sums(x: np.ndarray, m: int) -> np.ndarray:
     return c[m:] - c[:-m]
 
 
+@twin("mvar_phase")
 def _mvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
@@ -192,6 +195,7 @@ def _avar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("oavar_freq")
 def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{i=j}^{j+m-1} (y_{i+m} - y_i) = A_m[j+m] - A_m[j] = Δ²_m x_j / τ0, j = 0 … M-2m
     var = np.empty(ms.size)
@@ -204,6 +208,7 @@ def _oavar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("mvar_freq")
 def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{k=j}^{j+m-1} (A_m[k+m] - A_m[k]) = B_m[j+m] - B_m[j], j = 0 … M-3m+1
     var = np.empty(ms.size)
@@ -216,6 +221,7 @@ def _mvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("tvar_freq")
 def _tvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     var, n = _mvar_freq(y, ms, tau0)
     return var * (ms * tau0) ** 2 / 3.0, n

@@ -36,7 +36,7 @@ from typing import Any, Callable, Hashable, Iterator, Optional, TypeVar
 
 import numpy as np
 
-__all__ = ["shared_record", "derived", "memoized"]
+__all__ = ["shared_record", "derived", "memoized", "shares"]
 
 T = TypeVar("T")
 
@@ -149,3 +149,10 @@ def memoized(data: object, key: Hashable, make: Callable[[], T]) -> T:
     or for data the scope does not know, ``make()`` is called every time.
     """
     return derived(data, ("memo", key), make)
+
+
+def shares(data: object) -> bool:
+    """Whether ``data`` is the record of the current scope or one of its forms: what is
+    :func:`memoized` for it is then kept for the other statistics of the record."""
+    rec = _CURRENT.get()
+    return rec is not None and rec.form_key(data) is not None

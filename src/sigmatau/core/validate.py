@@ -13,6 +13,8 @@ from typing import Literal
 import numpy as np
 
 from ..errors import DataError, ParameterError
+from .accel import fused_for
+from .shared import memoized
 
 __all__ = [
     "DataType",
@@ -91,6 +93,9 @@ def as_series(data: object, name: str = "data", *, remove_offset: bool = False, 
     if remove_offset and _beyond_exact_float(arr):
         return _exact_offset_free(arr)
     arr = np.asarray(arr, dtype=np.float64)
+    fast = fused_for(arr.size)
+    if fast is not None and memoized(arr, ("all-finite",), lambda: fast.all_finite(arr)):
+        return arr  # the common case: no mask of the record's size (and once per record in a scope)
     finite = np.isfinite(arr)
     if gaps and not finite.all():
         _check_gaps(arr, finite, name)
@@ -175,10 +180,16 @@ def scale_to_unit(v: np.ndarray) -> tuple[np.ndarray, int]:
     user's numbers, and no square or sum of squares of data near 1e±300 can
     overflow or underflow on the way.
     """
-    peak = float(np.nanmax(np.abs(v))) if v.size else 0.0  # NaN: a missing sample (gap)
+    fast = fused_for(v.size) if v.dtype == np.float64 and v.ndim == 1 else None
+    if fast is not None:  # the same maximum, without |v| as a temporary of the record's size
+        peak = fast.abs_peak(v)
+    else:
+        peak = float(np.nanmax(np.abs(v))) if v.size else 0.0  # NaN: a missing sample (gap)
     if peak == 0.0:
         return v, 0
     k = math.frexp(peak)[1]
+    if k == 0:  # already in [0.5, 1): the samples themselves (validated data: no record-sized copy)
+        return v, 0
     return np.ldexp(v, -k), k
 
 

@@ -32,6 +32,7 @@ from typing import Any, Optional
 
 import numpy as np
 
+from ..core.accel import fused_for
 from ..core.validate import as_series, check_rate
 from ..core.gaps import present_runs
 from ..errors import ParameterError, SigmaTauWarning
@@ -428,10 +429,13 @@ def check_samples(
     found = _Findings()
     # Missing samples (NaN gaps): the checks of values read the samples present, the
     # spectrum the longest gap-free run.
-    present = x[~np.isnan(x)]
+    missing = np.isnan(x)
+    present = x[~missing] if missing.any() else x  # no copy of a record without gaps
+    del missing
     contiguous = x if present.size == x.size else _longest_run(x)
     n = present.size
-    std = float(present.std(ddof=1)) if n > 1 else 0.0
+    fast = fused_for(n) if n > 1 else None  # numpy's std bit for bit, without its temporary
+    std = (fast.std(present, 1) if fast is not None else float(present.std(ddof=1))) if n > 1 else 0.0
     q = _check_quantisation(present, rate_f, lsb, std, u, found)
     ratio, rolloff = _check_spectrum(contiguous, rate_f, q.n_levels, found)
     dec = _check_decimation(odr, rate_f, rolloff, found)

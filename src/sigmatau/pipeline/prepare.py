@@ -239,6 +239,9 @@ def _sensor_channels(log: Any, channels: dict) -> list[str]:
     return [n for n in channels if log.group_of(n) in _SENSOR_GROUPS]
 
 
+_NO_SERIES = np.empty(0)
+
+
 def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict, notes: list,
                 looked_at: Optional[dict] = None) -> int:
     """Samples to leave out at the start: the latest warm-up end found on the gyro and accel
@@ -258,7 +261,10 @@ def _warmup_cut(log: Any, channels: dict, mode: Union[str, float], records: dict
     ends = {}
     # the latest end over the channels: each tested at 1 %/channels, so that a stationary log is
     # cut by a false alarm at most 1 % of the time (not 1 % per channel)
-    found = _in_threads(lambda name: warmup(looked_at[name], rate=log.rate, alpha=WARMUP_ALPHA / len(sensors)),
+    # Only the records are kept: each result's series (a copy of its channel) is dropped in its
+    # thread, not held for every channel at once (six channel copies were the peak of the main job).
+    found = _in_threads(lambda name: replace(warmup(looked_at[name], rate=log.rate,
+                                                    alpha=WARMUP_ALPHA / len(sensors)), data=_NO_SERIES),
                         sensors)
     for name in sensors:
         r = found[name]

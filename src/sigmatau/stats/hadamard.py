@@ -10,6 +10,7 @@ from typing import Optional
 
 import numpy as np
 
+from ..core.accel import twin
 from ..core.driver import Statistic
 from ..core.taus import STOP_RATIOS
 from .engine import run
@@ -37,6 +38,7 @@ def _hvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("ohvar_phase")
 def _ohvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float):
     var = np.empty(ms.size)
     n = np.empty(ms.size, dtype=np.int64)
@@ -58,6 +60,7 @@ def _hvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     return var, n
 
 
+@twin("ohvar_freq")
 def _ohvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):
     # Σ_{i=j}^{j+m-1} (y_{i+2m} - 2y_{i+m} + y_i) = A_m[j+2m] - 2A_m[j+m] + A_m[j] = Δ³_m x_j / τ0
     var = np.empty(ms.size)

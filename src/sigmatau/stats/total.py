@@ -33,6 +33,7 @@ from typing import Literal, Optional
 
 import numpy as np
 
+from ..core.accel import twin
 from ..core.driver import Statistic
 from ..core.gaps import equivalent_points, nan_terms_variance
 from ..core.taus import STOP_RATIOS
@@ -83,6 +84,7 @@ def _doc_total(func):
 # --- kernels: (phase x, factors, τ0) -> (variance, number of terms) ---------------
 
 
+@twin("totvar_phase")
 def _totvar_kernel(x: np.ndarray, ms: np.ndarray, tau0: float) -> tuple[np.ndarray, np.ndarray]:
     """TOTVAR at each factor of ``ms`` from the phase ``x``, without building the extension.
 

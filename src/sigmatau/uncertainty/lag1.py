@@ -10,6 +10,7 @@ from typing import Callable, Literal
 
 import numpy as np
 
+from ..core.accel import fused_for
 from ..core.gaps import missing_mask
 from ..core.numeric import block_means, dot, sumsq
 from ..core.shared import memoized
@@ -204,16 +205,40 @@ def lag1_of_series(series: np.ndarray, m: int, *, data_type: str, dmin: int, dma
             f"lag-1 noise identification needs at least {min_points} points at m={m},"
             f" got {n} from {series.size} {data_type} samples"
         )
-    diffs = _Differences(series, data_type, m, detrend, min_points)
     gaps = missing_mask(series) is not None
+    fast = None if gaps or detrend or dmax > 3 else fused_for(series.size)
+    if fast is not None:
+        r1_at = _fused_r1(fast, series, data_type, m, acf, min_points)
+    else:
+        diffs = _Differences(series, data_type, m, detrend, min_points)
 
-    def r1_at(d: int) -> float:
-        return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
-                        lambda: _lag1_r1(diffs.at(d), acf, gaps))
+        def r1_at(d: int) -> float:
+            return memoized(series, ("lag1-r1", data_type, m, d, detrend, acf),
+                            lambda: _lag1_r1(diffs.at(d), acf, gaps))
 
     d, delta, r1 = difference_until_white(r1_at, m, dmin, dmax)
     alpha, alpha_est = lag1_alpha(d, delta, data_type)
     return Lag1Result(alpha=alpha, alpha_estimate=alpha_est, d=d, rho1=r1, m=m, n=int(n))
+
+
+def _fused_r1(fast, series: np.ndarray, dtype: str, m: int, acf: str, min_points: int) -> Callable[[int], float]:
+    """``r1_at(d)`` from the compiled kernels (:mod:`sigmatau.core.fused`): the analysis series at m
+    made in one pass, r1 in two passes over it, no centred or differenced copy; memoized per d."""
+    z = None
+
+    def make(d: int) -> float:
+        nonlocal z
+        if z is None:
+            z = series if m == 1 else (series[::m] if dtype == "phase" else fast.block_means(series, m))
+        return fast.lag1_r1(z, d, acf)
+
+    def r1_at(d: int) -> float:
+        r1 = memoized(series, ("lag1-r1-fused", dtype, m, d, acf), lambda: make(d))
+        if np.isnan(r1):
+            raise DataError("the series is constant at this averaging factor; its autocorrelation is undefined")
+        return r1
+
+    return r1_at
 
 
 def lag1_alpha(d: int, delta: float, data_type: str) -> tuple[int, float]:

@@ -15,6 +15,7 @@ from ..core.driver import compute
 from ..core.kernels import MVAR, OAVAR
 from ..core.numeric import block_means
 from ..core.powerlaw import EULER_GAMMA as _EULER_GAMMA
+from ..core.shared import memoized
 from ..core.taus import long_factors_expected
 from ..core.validate import as_series, check_data_type
 from ..errors import DataError, ParameterError
@@ -349,6 +350,14 @@ def rn_expected(n: Union[int, np.ndarray], alpha: int) -> np.ndarray:
     return np.full(n_a.shape, limits[alpha])
 
 
+def _rn_variances(series: np.ndarray, dtype: str, m: int) -> tuple[float, float]:
+    """MVAR and OAVAR of validated ``series`` at m (the two halves of R(n))."""
+    with long_factors_expected():  # long-τ factors are the point here
+        mv = compute(MVAR, series, rate=1.0, data_type=dtype, taus="octave", m=[m])[0].var[0]
+        av = compute(OAVAR, series, rate=1.0, data_type=dtype, taus="octave", m=[m])[0].var[0]
+    return float(mv), float(av)
+
+
 def rn_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = "freq") -> float:
     """Observed ``R(n) = MVAR(τ)/AVAR(τ)`` at averaging factor m.
 
@@ -378,9 +387,9 @@ def rn_ratio(data: object, m: int = 1, *, data_type: Literal["freq", "phase"] = 
     npts = series.size if dtype == "phase" else series.size + 1
     if npts < 3 * m:
         raise InsufficientDataError(f"R(n) needs at least {3 * m} phase points at m={m}, got {npts}")
-    with long_factors_expected():  # long-τ factors are the point here
-        mv = compute(MVAR, series, rate=1.0, data_type=dtype, taus="octave", m=[m])[0].var[0]
-        av = compute(OAVAR, series, rate=1.0, data_type=dtype, taus="octave", m=[m])[0].var[0]
+    # Each statistic of a record identifies its noise with the same rules: inside a shared_record
+    # scope the pair is computed once per m (two record passes per octave of m saved per statistic).
+    mv, av = memoized(series, ("rn-ratio", dtype, m), lambda: _rn_variances(series, dtype, m))
     if av == 0.0:
         raise DataError(f"the Allan variance is zero at m={m}; R(n) is undefined")
     return float(mv / av)
