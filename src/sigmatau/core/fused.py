@@ -38,6 +38,7 @@ import numpy as np
 
 from . import compiled as nb
 from .compiled import BLOCK, MVAR as _MVAR, OAVAR as _OAVAR, OHVAR as _OHVAR
+from .numeric import doublings_only
 from .shared import memoized, shares
 
 __all__ = [
@@ -189,15 +190,6 @@ class _WindowSums:
         return float(nb.b_terms(self.b, m, k))
 
 
-def _doublings_only(m: int, later: np.ndarray) -> bool:
-    """Every later factor is m times a power of two or m itself (core.kernels._doublings_only)."""
-    for v in later.tolist():
-        q, r = divmod(int(v), m)
-        if r or q & (q - 1):
-            return False
-    return True
-
-
 # --- the kernels: (series, ms, tau0) -> (var, n), normalised as their numpy twins ----
 
 
@@ -300,7 +292,7 @@ def _freq_kernel(y: np.ndarray, ms: np.ndarray, mean: float, kind: int):
         m = path[pos]
         ws.advance(m)
         if double:
-            if m >= 4 and _doublings_only(m, ms[order[pos + 1:]]):
+            if m >= 4 and doublings_only(m, ms[order[pos + 1:]]):
                 ws.release_a()
             k = M - 3 * m + 2
             sums[i] = ws.sums_b(k)

@@ -16,7 +16,7 @@ from .accel import twin
 from .driver import Statistic
 from .gaps import block_kernel, point_kernel, window_mean_kernel
 from .taus import STOP_RATIOS
-from .numeric import WindowSums, centred_sumsq, sumsq, sumsq_combination
+from .numeric import WindowSums, centred_sumsq, doublings_only, sumsq, sumsq_combination
 
 __all__ = [
     "STDVAR", "OSTDVAR", "AVAR", "OAVAR", "MVAR", "TVAR",
@@ -151,18 +151,9 @@ def window_sums_by_factor(y: np.ndarray, ms: np.ndarray, *, double: bool = False
     for pos, i in enumerate(order):
         m = int(ms[i])
         ws.advance(m)
-        if b_only and double and m >= 4 and _doublings_only(m, ms[order[pos + 1:]]):
+        if b_only and double and m >= 4 and doublings_only(m, ms[order[pos + 1:]]):
             ws.release_a()
         yield i, m, ws
-
-
-def _doublings_only(m: int, later: np.ndarray) -> bool:
-    """Every later factor is m times a power of two (2, 4, …) or m itself."""
-    for v in later.tolist():
-        q, r = divmod(int(v), m)
-        if r or q & (q - 1):
-            return False
-    return True
 
 
 def _stdvar_freq(y: np.ndarray, ms: np.ndarray, tau0: float):

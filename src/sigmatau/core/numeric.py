@@ -8,6 +8,7 @@ import numpy as np
 
 __all__ = [
     "sumsq", "dot", "window_sums", "block_means", "sumsq_combination", "centred_sumsq", "WindowSums", "CHUNK",
+    "doublings_only",
 ]
 
 
@@ -263,3 +264,20 @@ class WindowSums:
         n = M - w  # length of A_{w+1}
         np.add(A[:n], y[w : w + n], out=A[:n])
         self._w = w + 1
+
+
+def doublings_only(m: int, later: np.ndarray) -> bool:
+    """Whether every later averaging factor is ``m`` times a power of two (2, 4, …) or ``m``
+    itself: then window sums at ``m`` reach every later factor by exact doublings, and the
+    kernels may release the sums they no longer need (MVAR's A on an octave grid).
+
+    >>> doublings_only(4, np.array([4, 8, 32]))
+    True
+    >>> doublings_only(4, np.array([8, 12]))
+    False
+    """
+    for v in later.tolist():
+        q, r = divmod(int(v), m)
+        if r or q & (q - 1):
+            return False
+    return True

@@ -33,7 +33,7 @@ from ..errors import DataError
 from ..uncertainty.lag1 import difference_until_white, lag1_alpha
 from ..uncertainty.noiseid import (
     FAMILY_ALIASES, FAMILY_RULES, LAG1_MIN_POINTS, InsufficientDataError, b1_classify, b1_min_averages, b1_observed,
-    rn_expected,
+    rn_alpha,
 )
 from .buffers import CompensatedSums, Ring, rowdot
 
@@ -173,10 +173,7 @@ def _rn_split(rn: Callable[[int], float], m: int) -> Optional[tuple[int, float]]
         value = rn(m)
     except DataError:
         return None
-    wpm, fpm = float(rn_expected(m, 2)), float(rn_expected(m, 1))
-    alpha = 2 if value < math.sqrt(wpm * fpm) else 1
-    t = (math.log(value) - math.log(wpm)) / (math.log(fpm) - math.log(wpm)) if fpm != wpm else 0.0
-    return alpha, 2.0 - t
+    return rn_alpha(value, m)
 
 
 def _carried_from(done: list[int], ms: Sequence[int], i: int) -> int:

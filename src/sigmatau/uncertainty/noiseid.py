@@ -309,6 +309,17 @@ def _rn_split(series: np.ndarray, m: int, dtype: str) -> Optional[tuple[int, flo
         rn = rn_ratio(series, m, data_type=dtype)
     except DataError:
         return None
+    return rn_alpha(rn, m)
+
+
+def rn_alpha(rn: float, m: int) -> tuple[int, float]:
+    """White PM (2) or flicker PM (1) from an observed R(n) = MVAR/OAVAR at ``m``, and α̂.
+
+    α = 2 where R(n) is below the geometric mean of the two types' expectations
+    (:func:`rn_expected`), else 1; α̂ = 2 − t with t the position of ln R(n) between
+    ln R_WPM and ln R_FPM (0 at white PM, 1 at flicker PM). Used by :func:`identify` and by
+    the streamed identification (:mod:`sigmatau.stream`), which has R(n) from its own sums.
+    """
     wpm, fpm = float(rn_expected(m, 2)), float(rn_expected(m, 1))
     alpha = 2 if rn < math.sqrt(wpm * fpm) else 1
     # log-interpolated position between the two expectations
