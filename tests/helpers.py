@@ -109,3 +109,40 @@ def simulated_imu_log(seed: int = 11, duration: float = 120.0, rate: float = 50.
              for (g, a), s in zip(axes, streams)}
     units = {k: "rad/s" if k.startswith("gyro") else "m/s^2" for k in chans}
     return log_from_arrays(chans, rate=rate, units=units, name="sim")
+
+
+def headless_chromium():
+    """A headless Chromium driven by selenium, its console and DevTools network events logged.
+
+    Needs Debian's ``chromium`` and ``chromium-driver`` (installed by ``.ci/run``) and
+    ``selenium`` (test extra). Skips the test when one is missing, unless the environment
+    variable ``SIGMATAU_REQUIRE_BROWSER`` is set (``.ci/run`` sets it): then it fails, so
+    their absence cannot hide the check.
+    """
+    import os
+    import shutil
+
+    import pytest
+
+    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
+    driver_path = shutil.which("chromedriver")
+    try:
+        from selenium import webdriver
+        from selenium.webdriver.chrome.options import Options
+        from selenium.webdriver.chrome.service import Service
+    except ImportError:
+        webdriver = None
+    missing = [name for name, ok in (("chromium", chromium), ("chromedriver", driver_path), ("selenium", webdriver))
+               if not ok]
+    if missing:
+        if os.environ.get("SIGMATAU_REQUIRE_BROWSER"):
+            pytest.fail(f"browser test required but missing: {', '.join(missing)}")
+        pytest.skip(f"missing {', '.join(missing)}")
+    opts = Options()
+    opts.binary_location = chromium
+    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
+                "--disable-background-networking", "--window-size=1300,1000"):
+        opts.add_argument(arg)
+    # "performance" records the DevTools network events: every request the page makes.
+    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
+    return webdriver.Chrome(service=Service(driver_path), options=opts)

@@ -17,45 +17,20 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import shutil
 
 import numpy as np
 import pytest
 
-from helpers import simulated_imu_log
+from helpers import headless_chromium, simulated_imu_log
 from sigmatau.cli import main
 
 pytest.importorskip("matplotlib")
 
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-DRIVER = shutil.which("chromedriver")
-
 
 def _browser():
-    try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.options import Options
-        from selenium.webdriver.chrome.service import Service
-    except ImportError:
-        selenium = None
-    else:
-        selenium = True
-    missing = [name for name, ok in (("chromium", CHROMIUM), ("chromedriver", DRIVER), ("selenium", selenium))
-               if not ok]
-    if missing:
-        if os.environ.get("SIGMATAU_REQUIRE_BROWSER"):
-            pytest.fail(f"browser test required but missing: {', '.join(missing)}")
-        pytest.skip(f"missing {', '.join(missing)}")
-    opts = Options()
-    opts.binary_location = CHROMIUM
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                "--disable-background-networking", "--window-size=1300,1000"):
-        opts.add_argument(arg)
-    # "performance" records the DevTools network events: every request the page makes.
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
-    driver = webdriver.Chrome(service=Service(DRIVER), options=opts)
+    driver = headless_chromium()
     driver.set_script_timeout(30)
     # No network at all: a page that needs a CDN or a web font would fail to draw.
     driver.execute_cdp_cmd("Network.enable", {})

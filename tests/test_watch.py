@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from helpers import assert_one_line_error, run_cli
+from helpers import assert_one_line_error, headless_chromium, run_cli
 
 from sigmatau.cli import main
 
@@ -585,29 +585,7 @@ def test_live_page_during_a_run_and_the_same_outputs_as_analyze(tmp_path):
 
 
 def _browser():
-    import shutil
-
-    chromium = shutil.which("chromium") or shutil.which("chromium-browser")
-    driver_path = shutil.which("chromedriver")
-    try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.options import Options
-        from selenium.webdriver.chrome.service import Service
-    except ImportError:
-        webdriver = None
-    found = (("chromium", chromium), ("chromedriver", driver_path), ("selenium", webdriver))
-    missing = [n for n, ok in found if not ok]
-    if missing:
-        if os.environ.get("SIGMATAU_REQUIRE_BROWSER"):
-            pytest.fail(f"browser test required but missing: {', '.join(missing)}")
-        pytest.skip(f"missing {', '.join(missing)}")
-    opts = Options()
-    opts.binary_location = chromium
-    for arg in ("--headless=new", "--no-sandbox", "--disable-gpu", "--disable-dev-shm-usage",
-                "--disable-background-networking", "--window-size=1300,1000"):
-        opts.add_argument(arg)
-    opts.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
-    return webdriver.Chrome(service=Service(driver_path), options=opts)
+    return headless_chromium()
 
 
 def test_live_page_draws_hostile_data_as_text_in_a_browser():
