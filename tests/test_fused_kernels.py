@@ -237,6 +237,49 @@ def test_the_scope_shares_passes_between_statistics(monkeypatch):
         np.testing.assert_array_equal(shared[name].ci_low, result.ci_low, err_msg=name)
 
 
+def test_the_scope_forms_other_sums_only_for_the_statistics_it_names(monkeypatch):
+    """A scope that names its statistics forms OHDEV's sums in OADEV's pass only when it names
+    OHDEV, and TheoH's OAVAR rows in TOTDEV's pass only when it names TheoH (or OADEV); a
+    statistic the scope did not name still gets its own pass and the same numbers."""
+    y = _noise(60_000, -1, "freq", seed=22)
+    alone = {name: _public(name, y, "freq") for name in ("ohdev", "theoh")}
+    k2 = []
+    real_terms, real_double = fused.nb.a_terms, fused.nb.a_double_terms
+
+    def terms(a, yy, mean, m, k1, kk2, virtual):
+        k2.append(kk2)
+        return real_terms(a, yy, mean, m, k1, kk2, virtual)
+
+    def double(a, yy, mean, w, virtual, k1, kk2):
+        k2.append(kk2)
+        return real_double(a, yy, mean, w, virtual, k1, kk2)
+
+    monkeypatch.setattr(fused.nb, "a_terms", terms)
+    monkeypatch.setattr(fused.nb, "a_double_terms", double)
+    rows = {}
+    real_totvar = fused.nb.totvar_sums
+
+    def totvar(x, m, with_oavar):
+        rows[names] = rows.get(names, 0) + bool(with_oavar)
+        return real_totvar(x, m, with_oavar)
+
+    monkeypatch.setattr(fused.nb, "totvar_sums", totvar)
+    formed = {}
+    for names in (("mdev", "oadev", "totdev"), ("oadev", "ohdev", "totdev", "theoh"), None):
+        k2.clear()
+        with shared_record(y, statistics=names):
+            _public("oadev", y, "freq")
+            formed[names] = sum(k > 0 for k in k2)
+            _public("totdev", y, "freq")
+            late = {name: _public(name, y, "freq") for name in ("ohdev", "theoh")}
+        for name, result in alone.items():
+            np.testing.assert_array_equal(late[name].var, result.var, err_msg=f"{name} {names}")
+            np.testing.assert_array_equal(late[name].ci_high, result.ci_high, err_msg=f"{name} {names}")
+    assert formed[("mdev", "oadev", "totdev")] == 0 and rows.get(("mdev", "oadev", "totdev"), 0) > 0
+    assert formed[("oadev", "ohdev", "totdev", "theoh")] > 0 and formed[None] > 0
+    assert rows[("oadev", "ohdev", "totdev", "theoh")] > 0 and rows[None] > 0
+
+
 def test_the_main_job_with_and_without_numba(monkeypatch):
     channels = {"gyro_x": _noise(150_000, 0, "freq", seed=1), "gyro_y": _noise(150_000, -1, "freq", seed=2)}
     log = log_from_arrays(channels, rate=200.0, units={"gyro_x": "rad/s", "gyro_y": "rad/s"})

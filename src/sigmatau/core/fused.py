@@ -39,7 +39,7 @@ import numpy as np
 from . import compiled as nb
 from .compiled import BLOCK, MVAR as _MVAR, OAVAR as _OAVAR, OHVAR as _OHVAR
 from .numeric import doublings_only
-from .shared import memoized, shares
+from .shared import memoized, shares, wants
 
 __all__ = [
     "BLOCK", "VIRTUAL_MAX",
@@ -247,7 +247,7 @@ def totvar_phase(x: np.ndarray, ms: np.ndarray, tau0: float):
     x = _f64(x)
     n_pts = x.size
     var = np.empty(ms.size)
-    keep = shares(x)
+    keep = wants(x, "oadev", "theoh")  # OADEV of phase data and TheoH's short-τ rows read them
     store = _phase_store(x)
     for i, m in enumerate(ms):
         mi = int(m)
@@ -298,7 +298,7 @@ def _freq_kernel(y: np.ndarray, ms: np.ndarray, mean: float, kind: int):
             sums[i] = ws.sums_b(k)
         elif kind == _OAVAR:
             k = M - 2 * m + 1
-            k2 = M - 3 * m + 1 if shares(y) else 0
+            k2 = M - 3 * m + 1 if wants(y, "ohdev") else 0
             sums[i], s2 = ws.sums_a(k, k2)
             if k2 > 0:
                 store[tuple(path[:pos + 1])] = s2

@@ -32,11 +32,11 @@ from __future__ import annotations
 
 from contextlib import contextmanager
 from contextvars import ContextVar
-from typing import Any, Callable, Hashable, Iterator, Optional, TypeVar
+from typing import Any, Callable, Hashable, Iterable, Iterator, Optional, TypeVar
 
 import numpy as np
 
-__all__ = ["shared_record", "derived", "memoized", "shares"]
+__all__ = ["shared_record", "derived", "memoized", "shares", "wants"]
 
 T = TypeVar("T")
 
@@ -44,8 +44,9 @@ T = TypeVar("T")
 class _Record:
     """One record's shared values: forms of the source (arrays) and memoized results."""
 
-    def __init__(self, source: object) -> None:
+    def __init__(self, source: object, statistics: Optional[frozenset[str]] = None) -> None:
         self.source = source
+        self.statistics = statistics  # what the scope will compute; None: unknown (anything)
         # form key -> array; the arrays are kept alive here, so their id()s stay unique.
         self.forms: dict[Hashable, np.ndarray] = {}
         self.form_ids: dict[int, Hashable] = {}
@@ -81,7 +82,7 @@ _CURRENT: ContextVar[Optional[_Record]] = ContextVar("sigmatau_shared_record", d
 
 
 @contextmanager
-def shared_record(source: object) -> Iterator[None]:
+def shared_record(source: object, *, statistics: Optional[Iterable[str]] = None) -> Iterator[None]:
     """Share validation, phase and noise identification among the statistics of ``source``.
 
     Parameters
@@ -90,6 +91,11 @@ def shared_record(source: object) -> Iterator[None]:
         The record (one channel). Only calls given this very object (``is``)
         share; anything else is computed as usual. It must not be modified
         inside the block.
+    statistics : iterable of str, optional
+        The statistics the block will compute (``"oadev"``, ``"ohdev"`` …), when
+        known. A kernel that could form another statistic's sums in its own pass
+        (OADEV's pass forming OHDEV's) does so only for a statistic named here
+        (:func:`wants`); default: any statistic may follow, so it always does.
 
     Notes
     -----
@@ -98,7 +104,8 @@ def shared_record(source: object) -> Iterator[None]:
     would otherwise make and free its own. Nested scopes are allowed: the inner
     one is used until it closes.
     """
-    token = _CURRENT.set(_Record(source))
+    wanted = None if statistics is None else frozenset(str(s).lower() for s in statistics)
+    token = _CURRENT.set(_Record(source, wanted))
     try:
         yield
     finally:
@@ -156,3 +163,14 @@ def shares(data: object) -> bool:
     :func:`memoized` for it is then kept for the other statistics of the record."""
     rec = _CURRENT.get()
     return rec is not None and rec.form_key(data) is not None
+
+
+def wants(data: object, *statistics: str) -> bool:
+    """Whether ``data`` :func:`shares` the current scope and the scope will compute one of
+    ``statistics`` (or did not say what it computes): a kernel forms sums for another
+    statistic in its own pass only then, since forming them costs time (about 30 % more for
+    OADEV's pass with OHDEV's sums) that only that statistic repays."""
+    rec = _CURRENT.get()
+    if rec is None or rec.form_key(data) is None:
+        return False
+    return rec.statistics is None or any(s in rec.statistics for s in statistics)

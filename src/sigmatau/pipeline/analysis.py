@@ -618,7 +618,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
 
         # The statistics and the model of a channel share its validated samples, phase and
         # noise identification (computed once instead of once per statistic).
-        with shared_record(log[name]):
+        with shared_record(log[name], statistics=stats):
             ch = _channel(log, name, stats, taus, confidence, reference, model, options, step, dynamic, gauss_markov)
         if progress is not None:
             progress(f"{name}: {', '.join(ch.results) or 'no statistic'} in {ch.seconds:.1f} s")
