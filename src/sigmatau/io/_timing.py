@@ -300,9 +300,13 @@ def _gap_text(report: TimingReport, n: int) -> str:
 
 def to_seconds(x: np.ndarray, unit: str) -> np.ndarray:
     """Times in ``unit`` as float64 seconds (dividing by 1e3/1e6/1e9 rounds once, exactly)."""
-    x = x.astype(np.float64)
+    x = np.array(x, dtype=np.float64)  # a new array, converted in place below (no second copy)
     per_second = _PER_SECOND.get(unit)
-    return x / per_second if per_second else x * TIME_UNITS[unit]
+    if per_second:
+        np.divide(x, per_second, out=x)
+    else:
+        np.multiply(x, TIME_UNITS[unit], out=x)
+    return x
 
 
 def _summarise(
@@ -316,7 +320,9 @@ def _summarise(
     path: str,
     warnings: list[str] | None,
 ) -> TimingReport:
-    step = float(np.median(dt))
+    lo, hi = (float(dt.min()), float(dt.max())) if dt.size else (math.nan, math.nan)
+    uniform = lo == hi  # the common case of clean logs: every step the same, no sort for the median
+    step = lo if uniform else float(np.median(dt))
     # 12 digits: decimal timestamps in s leave round-off like 99.99999999999991 Hz
     measured = float(f"{1.0 / step:.12g}")
     nominal = measured if rate is None else rate
@@ -333,7 +339,14 @@ def _summarise(
             missing=max(int(round(float(dt[i]) * measured)) - 1, 1))
         for i in idx
     )
-    ok = dt[~is_gap]
+    ok = dt[~is_gap] if idx.size else dt  # no copy of the steps when there is no gap
+    if uniform:  # ok - step is exactly 0 everywhere
+        jitter = (0.0, 0.0) if ok.size else (None, None)
+    elif ok.size:
+        dev = ok - step
+        jitter = (float(np.std(dev)), float(max(dev.max(), -dev.min())))  # about the median: exact 0 when uniform
+    else:
+        jitter = (None, None)
     span = float(t[-1] - t[0])
     return TimingReport(
         samples=int(t.size),
@@ -343,8 +356,8 @@ def _summarise(
         measured_rate=float(measured),
         mean_rate=float((t.size - 1) / span) if span > 0 else None,
         span=span,
-        jitter_rms=float(np.std(ok - step)) if ok.size else None,  # about the median: exact 0 when uniform
-        jitter_max=float(np.max(np.abs(ok - step))) if ok.size else None,
+        jitter_rms=jitter[0],
+        jitter_max=jitter[1],
         gaps=gap_list,
         gap_threshold=gap_threshold,
     )
