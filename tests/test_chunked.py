@@ -62,6 +62,39 @@ def test_matches_in_memory(stat, data_type, noise):
     _assert_same(got, ref)
 
 
+@pytest.mark.parametrize("data_type", ["freq", "phase"])
+def test_statistics_of_one_series_share_its_noise_identification(data_type, monkeypatch):
+    """Every statistic computed on one ChunkedSeries reuses the noise identification the others
+    already streamed (the lag-1 sums, B1, R(n) at each factor, each a pass over the file): each
+    result equal, bit for bit, to the same statistic on a series of its own, with fewer
+    identification passes in all."""
+    from sigmatau.scale.chunked import noiseid as chunked_noiseid
+
+    data = _series("FFM", data_type)
+    calls = {"lag1": 0, "b1": 0}
+    for name in calls:
+        real = getattr(chunked_noiseid, f"_{name}")
+
+        def counting(*args, _real=real, _name=name, **kwargs):
+            calls[_name] += 1
+            return _real(*args, **kwargs)
+
+        monkeypatch.setattr(chunked_noiseid, f"_{name}", counting)
+    order = ("oadev", "ohdev", "totdev", "mdev", "tdev", "adev", "hdev")
+    shared = chunked.from_array(data, chunk_size=CHUNKS[1])
+    got = {stat: getattr(sigmatau, stat)(shared, rate=50.0, data_type=data_type) for stat in order}
+    with_sharing = dict(calls)
+    calls.update(lag1=0, b1=0)
+    for stat in order:
+        alone = getattr(sigmatau, stat)(chunked.from_array(data, chunk_size=CHUNKS[1]), rate=50.0,
+                                        data_type=data_type)
+        for field in ("var", "alpha", "edf", "ci_low", "ci_high"):
+            np.testing.assert_array_equal(getattr(got[stat], field), getattr(alone, field), err_msg=f"{stat} {field}")
+        assert got[stat].ci_reason == alone.ci_reason, stat
+    assert with_sharing["lag1"] < calls["lag1"] / 2, (with_sharing, calls)
+    assert with_sharing["b1"] <= calls["b1"], (with_sharing, calls)
+
+
 @pytest.mark.parametrize("stat", ["mdev", "oadev", "ohdev"])
 @pytest.mark.parametrize("noise", ["WFM", "RWFM"])
 def test_long_record_frequency(stat, noise):

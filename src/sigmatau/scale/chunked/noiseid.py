@@ -249,10 +249,21 @@ def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
     method: list[str] = []
     n_freq = src.n - 1 if dtype == "phase" else src.n
     min_averages = noiseid.b1_min_averages(family)
+    memo = getattr(src, "_memo", None)
+
+    def remembered(key: tuple, make: Callable[[], object]) -> object:
+        """``make()`` once per record and key (each statistic of a channel would repeat its passes)."""
+        if memo is None:
+            return make()
+        if key not in memo:
+            memo[key] = make()
+        return memo[key]
+
     for i, m in enumerate(m_list):
         if src.n // m >= noiseid.LAG1_MIN_POINTS:
             try:
-                alpha[i], est[i] = _lag1(raw, m, dtype, dmax, L, gaps)
+                alpha[i], est[i] = remembered(("lag1", m, dtype, dmax, L, gaps),
+                                              lambda: _lag1(raw, m, dtype, dmax, L, gaps))
             except noiseid.InsufficientDataError:
                 pass
             else:
@@ -262,15 +273,16 @@ def _identify(src: _Series, ms: np.ndarray, dtype: str, family: str,
             method.append("carried")
             continue
         try:
-            a, e, ambiguous = _b1(freq, m, fam == "hadamard", L,
-                                  None if n_terms is None else int(n_terms[i]), gaps)
+            n_exp = None if n_terms is None else int(n_terms[i])
+            a, e, ambiguous = remembered(("b1", m, dtype, fam == "hadamard", n_exp, L, gaps),
+                                         lambda: _b1(freq, m, fam == "hadamard", L, n_exp, gaps))
         except DataError:
             method.append("carried")
             continue
         alpha[i], est[i] = a, e
         if ambiguous:
             try:
-                rn = _rn(src, m, dtype)
+                rn = remembered(("rn", m, dtype, L), lambda: _rn(src, m, dtype))
             except DataError:
                 pass
             else:

@@ -97,6 +97,12 @@ class ChunkedSeries:
         self._peak: Optional[float] = None
         #: Missing (NaN) samples and the first and last present index, from the same pass.
         self._gaps: Optional[_Gaps] = None
+        #: Noise-identification values of this record by what they depend on (the lag-1 sums at
+        #: each factor, B1, R(n)), shared by every statistic computed on it: OADEV, OHDEV and
+        #: TOTDEV of one channel read the same decimated series, each pass a read of the file.
+        #: Shared with the scaled view (:func:`_scaled`): the identification is scale free,
+        #: bit for bit (a power of two commutes with every rounding).
+        self._memo: dict = {}
 
     def __len__(self) -> int:
         return self.n
@@ -120,6 +126,7 @@ class ChunkedSeries:
         other = ChunkedSeries(self._read, self.n, chunk_size=chunk_size, name=self.name,
                               read_strided=self._read_strided, close=self._close)
         other._scan, other._peak, other._gaps = self._scan, self._peak, self._gaps
+        other._memo = self._memo  # its keys hold the chunk size where the result depends on it
         return other
 
     # The StreamedSeries protocol (sigmatau.core.driver): how the statistics reach this record.
@@ -488,6 +495,7 @@ def _scaled(src: ChunkedSeries) -> tuple[ChunkedSeries, int]:
     out._scan = scaled_total
     out._peak = math.ldexp(peak, -k)
     out._gaps = src._gaps
+    out._memo = src._memo
     return out, k
 
 
