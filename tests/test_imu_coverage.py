@@ -135,8 +135,8 @@ def test_k_and_r_sharing_the_end_fast():
     The count of statements that hold is a sum of Bernoulli variables with the
     nominal probabilities p_i (0.683 for an interval, 0.8415 for a bound): mean
     Σp_i, variance Σp_i(1 − p_i) (Poisson-binomial; K and R of one run are
-    treated as independent). Accepted: within 3.29 sd of the mean (two-sided
-    0.1 %). Before the fix: 65 of 120 held for 60 seeds (54 %, expected ≈ 74 %,
+    treated as independent). Accepted: not below 3.29 sd under the mean (one-sided;
+    see the assertion). Before the fix: 65 of 120 held for 60 seeds (54 %, expected ≈ 74 %,
     −3.4 sd at 30 seeds), the kept term came out 1.07–1.29× the truth.
     """
     kept: list = []
@@ -146,31 +146,99 @@ def test_k_and_r_sharing_the_end_fast():
     held = sum(h for *_, h in stmts)
     mean, sd = p.sum(), math.sqrt(np.sum(p * (1 - p)))
     print(f"K, R statements held {held}/{len(stmts)} (expected {mean:.1f} ± {sd:.1f})")
-    assert abs(held - mean) <= 3.29 * sd, (held, mean, sd)
+    # One-sided since the selection-aware bounds (issue 11): a dropped R's bound over-covers in
+    # N+K+R (22 of 22 here; 117 of 122 in the grid, KNOWN_OPEN: the simulated ramp is
+    # deterministic) and the kept K's interval is conservative (27 of 30), so the pooled count
+    # sits above its nominal mean (60 of 60 statements: 56 held, expected 44.5 ± 3.3). What this
+    # test guards against is the under-coverage it was written for.
+    assert held >= mean - 3.29 * sd, (held, mean, sd)
     both = sum("K" in k and "R" in k for k in kept)
     print(f"K and R both kept in {both}/30 runs")   # reported: the selection may keep one (see imu Notes)
 
 
-#: Statements known not to cover at their nominal rate (seeds 60 000 … 60 199), per configuration.
-KNOWN_OPEN = {"N+B+K+R": {("K", "bound")}}
+def _copula_curves(truth: dict, rng: np.random.Generator, draws: int):
+    """OADEV curves of the 2 h, 100 Hz grid record drawn from a model of the points themselves:
+    AVAR_i = model_i·X_i with ln X jointly normal (mean −s_i²/2, variance s_i² = ln(1 + 2/ν_i), so
+    that E X = 1 and var X ≈ 2/ν, right-skewed as a χ²), ν_i the Greenhall EDF of the dominant term
+    and the correlation across τ of :func:`sigmatau.imu.fitting._correlation`. No time series: a
+    draw costs nothing, and the fit's own model of its points holds by construction."""
+    from sigmatau.imu import from_curve
+    from sigmatau.imu.fitting import _correlation
+    from sigmatau.imu.terms import _ALPHA, _design
+    from sigmatau.uncertainty.confidence import edf_array
+
+    n = int(GRID_DURATION * GRID_RATE)
+    taus = 2.0 ** np.arange(18) / GRID_RATE
+    c = np.array([truth.get(t, 0.0) ** 2 for t in "QNBKR"])
+    parts = _design(taus, GRID_RATE) * c
+    alpha = np.array([_ALPHA["QNBKR"[k]] for k in np.argmax(parts, axis=1)])
+    nu = np.asarray(edf_array("oadev", alpha, np.round(taus * GRID_RATE).astype(np.int64), n + 1), float)
+    s = np.sqrt(np.log1p(2.0 / nu))
+    chol = np.linalg.cholesky(_correlation(taus, alpha))
+    for _ in range(draws):
+        x = np.exp(s * (chol @ rng.standard_normal(taus.size)) - 0.5 * s * s)
+        yield from_curve(taus, np.sqrt(parts.sum(axis=1) * x), rate=GRID_RATE, n_samples=n)
+
+
+def test_dropped_k_bound_holds_given_the_drop_fast(rng):
+    """The upper bound printed for a K that the term selection dropped holds at its nominal rate
+    (84.1 %, the upper end of the 68.3 % interval) among the runs that drop it: N+B+K+R, whose K
+    sits at the detection limit (dropped in about half the runs), on 100 curves drawn from the
+    points' own model (``_copula_curves``). The count of bounds that hold is binomial; accepted:
+    within 3.29 sd (two-sided 0.1 %) of 84.1 %.
+
+    Before the selection-aware bound: 26 of 46 held (56.5 %; after: 41 of 46): K is dropped
+    exactly when it came out low, and a bound built from its estimate as if it had not been
+    selected is too low in those runs."""
+    truth = GRID["N+B+K+R"]
+    held = []
+    for curve in _copula_curves(truth, rng, 100):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ImuWarning)
+            k = analyze(curve, unit="rad/s").K
+        if not k.resolved:
+            held.append(truth["K"] <= k.high)
+    p0, n = _nominal("bound"), len(held)
+    sd = math.sqrt(p0 * (1 - p0) / n)
+    print(f"dropped K's bound held in {sum(held)}/{n} runs ({100 * sum(held) / n:.1f} %, nominal {100 * p0:.1f} %)")
+    assert n >= 30, n
+    assert abs(sum(held) / n - p0) <= 3.29 * sd, (sum(held), n)
+
+
+#: Statements known not to hold at their nominal rate within the band of ``test_grid_coverage``
+#: (seeds 60 000 … 60 199), per configuration: (term, method, kind) → measured (held, of). All
+#: are read-off bounds, and all over-cover: the bound rule bounds the whole curve, and the term is
+#: only a share of it at every τ (K and R sharing the end, B under N and K), so the bound holds in
+#: nearly every run. Made a bound on the term itself, it would be the fit's bound again. And the
+#: fit's bound of a dropped R in N+K+R over-covers (96 %): the simulated R is a deterministic ramp,
+#: whose share of the long-τ points does not scatter, while the fit's error model (and the spread
+#: of the selection-aware bound) treats every share as noise.
+KNOWN_OPEN = {
+    "N+B+K": {("K", "readoff", "bound"): (198, 200)},
+    "N+K+R": {("R", "readoff", "bound"): (200, 200), ("R", "fit", "bound"): (117, 122)},
+    "N+B+K+R": {("B", "readoff", "bound"): (106, 106), ("K", "readoff", "bound"): (192, 192),
+                ("R", "readoff", "bound"): (200, 200)},
+}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("config", list(GRID))
 def test_grid_coverage(config):
-    """Every printed statement of the fit, per term, over 200 seeds: intervals
-    cover, and bounds hold, at their nominal rates within ±5 points plus three
-    binomial standard errors of the count (a class with fewer than 30 members
-    is reported, not tested). The read-offs are reported (see the module
-    docstring for the measured figures).
+    """Every printed statement, of the fit and of the read-offs, per term, over 200
+    seeds: intervals cover, and bounds hold, at their nominal rates within ±5 points
+    plus three binomial standard errors of the count (a class with fewer than 30
+    members is reported, not tested).
 
-    Measured at commit time: holds for Q+N, N+B, N+B+K, N+K+R; not for N+B+K+R,
-    the dropped K's bound holding in 69 of 101 runs (66 before the redder-type EDF rule
-    of the OADEV points; nominal 84 %): the selection drops K in the runs where it came
-    out low. That gap is open (issue 11 note) and listed in ``KNOWN_OPEN``: the test
-    asserts that no other statement fails and that the known one is still more than 5
-    points short (69/101 sits on the edge of the band's three standard errors), so a new
-    failure, or the known one fixed, both fail it."""
+    Measured at commit time (seeds 60 000 … 60 199): every fit statement is in the
+    band; the bound of a K the selection dropped holds in 89 of 101 runs in N+B+K+R
+    (88.1 %; 69 of 101 before the selection-aware bound) and 116 of 135 in N+B+K
+    (85.9 %; 97 before), a dropped R's in 133 of 147 (90.5 %; 136 before). Six
+    classes stay more than 5 points off (``KNOWN_OPEN``, all over-covering); the
+    test asserts that no other statement fails and that each known one is still
+    more than 5 points off its nominal rate, so a new failure, or a known one
+    fixed, both fail it. Also more than 5 points off but inside the band: the B
+    read-off with K and R (55 of 94, 58.5 %), kept K and R intervals (73.6–85.9 %)
+    and N's (75.5–82.5 %)."""
     runs = 200
     table: dict = {}
     for seed in range(runs):
@@ -182,18 +250,16 @@ def test_grid_coverage(config):
         p0 = _nominal(kind)
         rate = k / n
         print(f"{config} {t} {method} {kind}: {k}/{n} = {100 * rate:.1f} % (nominal {100 * p0:.1f} %)")
-        if method == "fit" and n >= 30:
+        if n >= 30:
             se = math.sqrt(p0 * (1 - p0) / n)
             if abs(rate - p0) > 0.05 + 3 * se:
-                failures.append((t, kind, k, n))
-    known = KNOWN_OPEN.get(config, set())
-    assert {(t, kind) for t, kind, _, _ in failures} <= known, failures
-    for t, kind in known:
-        # Still open: below nominal by more than the ±5-point target (measured 65–68 %
-        # against 84 %, on the edge of the band's three standard errors). Once within
-        # ±5 points, this entry goes.
-        n, k = table[(t, "fit", kind)]
-        assert k / n < _nominal(kind) - 0.05, (t, kind, k, n)
+                failures.append((t, method, kind))
+    known = KNOWN_OPEN.get(config, {})
+    assert set(failures) <= set(known), (failures, known)
+    for key, measured in known.items():
+        # Still open: more than the ±5-point target off nominal. Once within, this entry goes.
+        n, k = table[key]
+        assert abs(k / n - _nominal(key[2])) > 0.05, (key, k, n, measured)
 
 
 def test_b_readoff_unbiased_between_n_and_k_fast():

@@ -29,10 +29,10 @@ from ..stats.allan import oadev
 from ..uncertainty.confidence import ONE_SIGMA, edf_array
 from . import checks as checks_module
 from .checks import DataChecks, check_samples
-from .fitting import _Fit, _fit_model, _fit_parameters
+from .fitting import _Fit, _fit_model, _fit_parameters, _selection_aware_bounds
 from .gaussmarkov import GM_MODES, _choose, _Choice, _gm_result
 from .noisemodel import NoiseModel
-from .readoffs import _readoffs
+from .readoffs import _curve_bound, _readoffs
 from .results import Flag, Parameter, Region
 from .terms import _NAMES, ImuWarning, _gm_column
 from .units import TERMS, SensorUnit, pretty, sensor_unit
@@ -224,9 +224,27 @@ def analyze(
     small (a kept K absorbed a dropped R and covered in 23–53 % of runs). A
     kept term's interval on ``c = P²`` is ``[max(ĉ − zσ_c, 0), ĉ + zσ_c]``
     (z for the two-sided level), widened to include the selected model's
-    value; a dropped term's upper bound is the larger of ``√(max(ĉ, 0) +
-    zσ_c)`` and ``√(c + zσ_c)`` of a refit of the selected terms with it forced
-    in (one-sided at ``(1 + p)/2``).
+    value. A dropped term's upper bound holds at ``(1 + p)/2`` *given that
+    the selection dropped it* (it drops a term exactly when its estimate came
+    out low, so a bound built as if the term had not been selected falls short
+    in those runs: 69 of 101 instead of 84 % for the K of N+B+K+R). In the
+    fit's linearised Gaussian model of the AVAR points, ``v ~ N(Ac, V)`` with
+    ``V`` the modelled covariance above, the unconstrained ``ĉ = g·v`` and the
+    part of the data independent of it, ``u = v − bĉ`` (``b = Vgᵀ/gVgᵀ``),
+    separate; given ``u`` the selection drops the term exactly when
+    ``ĉ < t*(u)``, found by rerunning the selection on ``u + bt``. Given the
+    drop, ``ĉ`` is then a normal truncated above at ``t*``, and the bound
+    ``U`` on ``c`` solves ``Φ((ĉ − U)/s(U)) = ((1 − p)/2)·Φ((t* − U)/s(U))``
+    (the Neyman construction conditional on the selection event; Lee, Sun,
+    Sun & Taylor 2016; Fithian, Sun & Taylor 2014; when ``U ≤ 0``, the ``U``
+    of ``ĉ = 0``, since ``c ≥ 0``), with the spread ``s(U)``
+    of ``ĉ`` evaluated at the candidate value, as in a score (Wilson)
+    interval: the scatter of an AVAR point grows with its level, so a spread
+    taken at a low estimate is too small exactly in the runs that drop the
+    term. When no finite ``U`` solves it (a term carried by a few points that
+    scatter as much as their level), or when it is lower, the *bound rule* of
+    the read-offs applied to the whole curve is printed instead: no term's line
+    can lie above every point of the curve.
 
     *Gauss–Markov.* A first-order GM process (variance σ², correlation time
     T) adds ``σ²·(2T/τ)[1 − (T/2τ)(3 − 4e^(−τ/T) + e^(−2τ/T))]`` (exact form of
@@ -259,6 +277,11 @@ def analyze(
     IEEE Std 952-1997 Annex C and IEEE Std 1554-2005 (Allan-variance noise
     terms); ST DT0064 ("Gyroscope noise"); N. El-Sheimy, H. Hou, X. Niu, IEEE
     Trans. Instrum. Meas. 57(1) (2008) 140–149; numerics.md §2, §3, §6.
+    Selection-aware bounds: J. D. Lee, D. L. Sun, Y. Sun, J. E. Taylor, "Exact
+    post-selection inference, with application to the lasso", Ann. Statist.
+    44(3) (2016) 907–927; W. Fithian, D. L. Sun, J. E. Taylor, "Optimal
+    inference after model selection", arXiv:1410.2597 (2014); E. B. Wilson,
+    J. Am. Stat. Assoc. 22 (1927) 209–212 (the spread at the candidate value).
 
     Examples
     --------
@@ -291,7 +314,9 @@ def analyze(
     gm = _gm_result(t_s, d_s**2, nu_s, rate_f, fit, choice, conf, su, gauss_markov) if choice.chosen else None
     ro_t, ro_d, ro_nu, ro_gain, ro_vcov = _without_gm(fit, t_s, d_s, nu_s, rate_f)
     readoff, regions = _readoffs(ro_t, ro_d, ro_nu, conf, su, terms, rate_f, fit.full_coef[:5], ro_gain, ro_vcov)
-    fitted = _fit_parameters(fit, conf, su, terms, t_s)
+    dropped = _selection_aware_bounds(fit, t_s, d_s**2, nu_s, rate_f, terms, min_significance, conf)
+    caps = {t: _curve_bound(t, ro_t, ro_d, ro_nu, conf, su) for t in dropped}
+    fitted = _fit_parameters(fit, conf, su, terms, t_s, dropped, caps)
     primary = _primary(fitted, su, conf)
     flags += _compare(readoff, fitted, regions, t_s)
     flags += _model_flags(fit, data_checks, primary, su)

@@ -4,15 +4,19 @@ How the fit works is described in :func:`sigmatau.imu.analyze` (*Fit*, *Interval
 a weighted non-negative least-squares fit (``irls_fit``, shared with ``fit_power_law``) with the sandwich
 covariance of variance estimates correlated across τ (``_correlation``), a
 model-discrepancy floor when the χ² says the curve departs from the model
-(``_discrepancy``), backward term selection (``_select_terms``), upper bounds
-of the dropped terms (``_dropped_bounds``) and the unconstrained fit of every
-term behind the intervals (``_fit_free``, ``_fit_parameters``).
+(``_discrepancy``), backward term selection (``_select_terms``), the
+unconstrained fit of every term behind the intervals (``_fit_free``,
+``_fit_parameters``) and the selection-aware upper bounds of the dropped terms
+(``_selection_aware_bounds``: where the selection's decision flips,
+``_drop_edge``; the spread at a candidate value, ``_spread_at``; the truncated
+normal's Neyman limit, ``_truncated_upper``). ``_dropped_bounds`` (a refit with
+the term forced in) serves the Gauss–Markov term's bound.
 """
 
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Sequence
+from typing import Mapping, NamedTuple, Sequence
 
 import numpy as np
 from scipy.special import chdtrc, ndtri
@@ -240,7 +244,7 @@ def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, t
     eps, raw = _discrepancy(design, var, nu, taus, cols)
     cols, h, cov, chi2, dof, dominant, z, needed = _select_terms(design, var, nu, taus, cols, eps,
                                                                  min_significance)
-    significant = dof >= 1 and all(z[i] >= min_significance or cols[i] in needed for i in range(len(cols)))
+    significant = _significant(cols, dof, z, needed, min_significance)
     kept_cols = [c for c, hc in zip(cols, h) if hc > 0] if significant else []
     filter_time = 0.0
     if significant and 0 in cols and h[cols.index(0)] < 0:
@@ -256,6 +260,12 @@ def _fit_model(taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float, t
     return _Fit(coef, full, tuple(names[c] for c in kept_cols), chi2, dof, upper, dominant, eps, filter_time,
                 raw, tuple(names[c] for c in needed if c in kept_cols), full_coef, full_cov,
                 full_gain, var_cov, design.gm_tau)
+
+
+def _significant(cols: list[int], dof: int, z: np.ndarray, needed: set, min_significance: float) -> bool:
+    """Whether the model left by :func:`_select_terms` is reported: a degree of freedom left and
+    every column significant or needed (else no term is reported as kept)."""
+    return dof >= 1 and all(z[i] >= min_significance or cols[i] in needed for i in range(len(cols)))
 
 
 def _select_terms(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
@@ -338,8 +348,8 @@ def _free_fit_of_every_term(design: _Cols, var: np.ndarray, nu: np.ndarray, taus
     return full_coef, full_cov, full_gain, var_cov
 
 
-def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str], taus: np.ndarray
-                    ) -> dict[str, Parameter]:
+def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str], taus: np.ndarray,
+                    dropped: Mapping[str, float], caps: Mapping[str, float]) -> dict[str, Parameter]:
     """Parameters of the fit: values from the selected model, intervals and bounds
     from the unconstrained fit of every term.
 
@@ -349,8 +359,9 @@ def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str]
     it when its realisation is high. The unconstrained fit of all terms has
     neither effect: with ``ĉ`` and ``σ_c`` from it the interval on ``c = P²``
     is ``[max(ĉ − zσ_c, 0), ĉ + zσ_c]`` (z for the two-sided level), widened to
-    include the selected model's value, and a dropped term's upper bound is
-    ``√(max(ĉ, 0) + zσ_c)`` (one-sided at ``(1 + p)/2``).
+    include the selected model's value. A dropped term's upper bound is
+    ``√U`` with ``U`` from ``dropped`` (:func:`_selection_aware_bounds`, on c),
+    or the curve's own bound from ``caps`` (on the coefficient) when lower.
     """
     z = ndtri(0.5 + conf / 2.0)
     out = {}
@@ -376,16 +387,159 @@ def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str]
                 note=(f"masked: the 1/τ² term is negative (a low-pass filter, τ_f = {fit.filter_time:.3g} s),"
                       " which hides any quantisation"))
         else:
-            c, sc = fit.upper.get(t, (0.0, math.inf))
-            # The larger of two bounds: the unconstrained fit's, and that of a refit of the
-            # selected terms with this one forced in (non-negative), whose estimate is not
-            # pulled below zero by a neighbour's realisation at the end of the record.
-            free = math.sqrt(max(cf, 0.0) + z * sf) if math.isfinite(sf) else math.inf
-            forced = math.sqrt(c + z * sc) if math.isfinite(sc) else math.inf
-            bound = max(free, forced)
+            c_bound = dropped.get(t, math.inf)
+            bound = math.sqrt(max(c_bound, 0.0))
+            cap = caps.get(t, math.inf)
+            how = (f"the selection-aware bound (ĉ = {cf:.4g}, σ_c = {sf:.3g} from the unconstrained fit of every"
+                   f" term, a normal truncated where the selection would keep {t})")
+            if cap < bound:
+                bound = cap
+                how = "the curve's own bound (the read-off rule), lower than the selection-aware bound"
             out[t] = Parameter(
                 t, math.nan, 0.0, bound, unit, False, "fit", conf, su.kind,
                 note=(f"dropped by term selection (not significant over τ = {taus[0]:.3g}–{taus[-1]:.3g} s);"
-                      f" upper bound: the larger of √(max(ĉ, 0) + {z:.3g}σ_c) from the unconstrained fit of"
-                      f" every term and √(c + {z:.3g}σ_c) from a refit with {t} forced in"))
+                      f" upper bound at {50 * (1 + conf):.3g} % given the drop: {how}"))
+    return out
+
+
+def _kept_terms(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray, cols: list[int],
+                eps: float, min_significance: float) -> set[int]:
+    """The columns that :func:`_fit_model`'s selection reports as kept for the AVAR points ``var``."""
+    try:
+        left, h, _, _, dof, _, z, needed = _select_terms(design, var, nu, taus, cols, eps, min_significance)
+    except DataError:
+        return set()
+    if not _significant(left, dof, z, needed, min_significance):
+        return set()
+    return {c for c, hc in zip(left, h) if hc > 0}
+
+
+#: Distances (in standard errors σ_c) above the observed ĉ at which the selection is rerun to find
+#: where it would keep a dropped term, then bisections between the last two; a term still dropped
+#: at the last distance is taken to be dropped whatever ĉ (a truncation 6 σ_c above ĉ leaves the
+#: bound, about 1 σ_c above ĉ, all but unchanged: Φ(5) = 1 − 3·10⁻⁷).
+_EDGE_STEPS = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0)
+_EDGE_BISECTIONS = 5
+
+
+def _drop_edge(fit: _Fit, design: _Cols, cols: list[int], var: np.ndarray, nu: np.ndarray,
+               taus: np.ndarray, j: int, min_significance: float) -> float:
+    """The value ``t*`` of the unconstrained estimate ``ĉ_j`` below which the selection drops column
+    ``j``, the part of the data independent of ``ĉ_j`` held fixed (``inf`` when it drops it within
+    ``_EDGE_STEPS[-1]`` standard errors above the observed ``ĉ_j``).
+
+    In the fit's linearised Gaussian model of the AVAR points (``v ~ N(Ac, V)``, ``V`` =
+    ``fit.var_cov``, ``ĉ = g·v`` with ``g`` the row of ``fit.full_gain``), ``v = u + b ĉ_j`` with
+    ``b = V gᵀ/(g V gᵀ)`` splits the points into ``ĉ_j`` and ``u``, uncorrelated with it (hence
+    independent: jointly Gaussian). The selection is rerun on ``u + b t`` for ``t`` above the observed
+    ``ĉ_j``; a trial with a point at or below zero is outside the model and counts as dropped.
+    """
+    g = fit.full_gain[j]
+    s2 = float(g @ fit.var_cov @ g)
+    sd, c_obs = math.sqrt(s2), float(fit.full_coef[j])
+    b = fit.var_cov @ g / s2
+    u = var - b * c_obs
+
+    def kept(t: float) -> bool:
+        v = u + b * t
+        return bool(np.all(v > 0)) and j in _kept_terms(design, v, nu, taus, cols, fit.eps, min_significance)
+
+    if not kept(c_obs + _EDGE_STEPS[-1] * sd):
+        return math.inf
+    lo, hi = c_obs, c_obs + _EDGE_STEPS[-1] * sd
+    for k in _EDGE_STEPS[:-1]:
+        if kept(c_obs + k * sd):
+            hi = c_obs + k * sd
+            break
+        lo = c_obs + k * sd
+    for _ in range(_EDGE_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (lo, mid) if kept(mid) else (mid, hi)
+    return 0.5 * (lo + hi)
+
+
+def _spread_at(fit: _Fit, design: _Cols, j: int):
+    """``s(c)``: the standard error of the unconstrained ``ĉ_j`` when the true ``c_j`` is ``c`` (the
+    other coefficients at their estimates), each point's standard error scaled with its modelled
+    AVAR (``s_i ∝ AVAR_i``, as ``√(2/ν)`` says) and the points' correlation kept."""
+    model = design.mat @ fit.full_coef
+    s = np.sqrt(np.clip(np.diag(fit.var_cov), 0.0, None))
+    safe = np.where(s > 0, s, 1.0)
+    corr = fit.var_cov / np.outer(safe, safe)
+    pos = np.where(model > 0, model, 1.0)
+    g, col, c_obs = fit.full_gain[j], design.mat[:, j], float(fit.full_coef[j])
+
+    def spread(c: float) -> float:
+        m = np.maximum(model + col * (c - c_obs), 1e-3 * np.abs(model))
+        gs = g * s * m / pos
+        return math.sqrt(max(float(gs @ corr @ gs), 0.0))
+
+    return spread
+
+
+def _truncated_upper(c_obs: float, spread, edge: float, level: float) -> float:
+    """The upper limit ``U`` with ``P_U(ĉ' ≤ ĉ | ĉ' < edge) = 1 − level`` for ``ĉ' ~ N(U, s(U)²)``:
+    ``Φ((ĉ − U)/s(U)) = (1 − level)·Φ((edge − U)/s(U))`` (``inf`` when no finite U satisfies it)."""
+    from scipy.optimize import brentq  # imported here: keeps `import sigmatau` light
+    from scipy.special import log_ndtr
+
+    log_alpha = math.log(1.0 - level)
+    s0 = spread(c_obs)
+
+    def excess(x: float) -> float:   # x = (U − ĉ)/s(ĉ); decreasing from ln ½ − ln α > 0
+        c = c_obs + x * s0
+        s = spread(c)
+        trunc = float(log_ndtr((edge - c) / s)) if math.isfinite(edge) else 0.0
+        return float(log_ndtr((c_obs - c) / s)) - trunc - log_alpha
+
+    lo, hi = 0.0, 1.0
+    while excess(hi) > 0:
+        lo, hi = hi, 2.0 * hi
+        if hi > 1e4:
+            return math.inf
+    return c_obs + s0 * brentq(excess, lo, hi, xtol=1e-6)
+
+
+def _selection_aware_bounds(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float,
+                            terms: Sequence[str], min_significance: float, conf: float) -> dict[str, float]:
+    """Upper bound on ``c = P²`` of every term the selection dropped, holding at ``(1 + conf)/2``
+    given that it was dropped (see :func:`sigmatau.imu.analyze`, *Intervals*).
+
+    Returns
+    -------
+    dict
+        Term → bound on c (``inf``: none finite; the caller caps it by the curve's bound).
+
+    Notes
+    -----
+    Post-selection inference by conditioning on the selection event (Lee, Sun, Sun & Taylor 2016;
+    Fithian, Sun & Taylor 2014): with ``ĉ`` the unconstrained estimate and ``u`` the part of the
+    data independent of it (:func:`_drop_edge`), the selection drops the term exactly when
+    ``ĉ < t*(u)``, so given the drop and ``u``, ``ĉ`` is a normal truncated above at ``t*``. The
+    bound ``U`` solves ``Φ((ĉ − U)/s(U)) = ((1 − conf)/2)·Φ((t* − U)/s(U))``: for every ``u`` the
+    probability that ``c ≤ U`` given the drop is ``(1 + conf)/2``, hence also given the drop alone.
+    The spread ``s(U)`` is evaluated at the candidate (:func:`_spread_at`), as in a score (Wilson)
+    interval: the AVAR points' scatter grows with their level, and a spread taken at a low estimate
+    is too small exactly in the runs that the selection drops. When ``U ≤ 0`` (an estimate far
+    below zero, 1–3 % of the dropped runs) the bound of ``ĉ = 0`` is given instead: ``c ≥ 0``, and a
+    record should not print ``K < 0``; ``U`` increases with ``ĉ``, so this only adds coverage.
+    """
+    design = _columns(taus, rate, fit.gm_tau)
+    cols = [design.names.index(t) for t in tuple(terms) + (("GM",) if math.isfinite(fit.gm_tau) else ())]
+    out: dict[str, float] = {}
+    for t in terms:
+        if t in fit.kept or (t == "Q" and fit.filter_time > 0):
+            continue
+        j = design.names.index(t)
+        spread = _spread_at(fit, design, j)
+        if not spread(float(fit.full_coef[j])) > 0:
+            out[t] = math.inf
+            continue
+        edge = _drop_edge(fit, design, cols, var, nu, taus, j, min_significance)
+        bound = _truncated_upper(float(fit.full_coef[j]), spread, edge, 0.5 + conf / 2.0)
+        if bound <= 0:
+            # An estimate so far below zero that the limit is not positive (1–3 % of the dropped
+            # runs): the bound at the physical boundary ĉ = 0 is printed instead of "K < 0".
+            bound = _truncated_upper(0.0, spread, edge if edge > 0 else math.inf, 0.5 + conf / 2.0)
+        out[t] = bound
     return out

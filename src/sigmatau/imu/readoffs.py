@@ -282,3 +282,15 @@ def _neighbour_share(design: np.ndarray, coef: np.ndarray, own: int) -> np.ndarr
     c = np.array(coef, float)
     c[own] = 0.0
     return design @ c
+
+
+
+def _curve_bound(term: str, taus: np.ndarray, dev: np.ndarray, nu: np.ndarray, conf: float, su: SensorUnit
+                 ) -> float:
+    """The *bound rule*'s upper bound of ``term`` on the curve, whether or not a region exists: no
+    term's line can lie above the whole curve. It caps the fit's selection-aware bound of a dropped
+    term (:func:`sigmatau.imu.fitting._selection_aware_bounds`), which has no finite value when the
+    few points that carry the term scatter as much as their level."""
+    nan = np.full(taus.size, np.nan)
+    curve = _Curve(taus, dev, nu, np.log(taus), np.log(dev), nan, nan, np.zeros((taus.size, 5)))
+    return _upper_bound(term, curve, conf, su)[0].high
