@@ -6,7 +6,7 @@ import pytest
 import sigmatau
 from sigmatau.analysis import analyze_log, log_from_arrays
 from sigmatau.core.shared import shared_record
-from sigmatau.pipeline.analysis import _tdev_from_mdev
+from sigmatau.pipeline.analysis import tdev_from_mdev
 
 FIELDS = ("var", "dev", "alpha", "alpha_estimate", "edf", "ci_low", "ci_high", "n", "m", "taus")
 
@@ -21,20 +21,20 @@ def _assert_same(a, b):
 
 @pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2])
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
-def test_tdev_from_mdev_is_tdev_bit_for_bit(alpha, data_type, rng):
+def testtdev_from_mdev_is_tdev_bit_for_bit(alpha, data_type, rng):
     y = sigmatau.power_law_noise(6000, alpha=alpha, rng=rng) * 1e-3 + 5.0
     for rate, confidence in ((1.0, sigmatau.ONE_SIGMA), (200.0, 0.95)):
         m = sigmatau.mdev(y, rate=rate, data_type=data_type, confidence=confidence)
-        _assert_same(_tdev_from_mdev(m), sigmatau.tdev(y, rate=rate, data_type=data_type, confidence=confidence))
+        _assert_same(tdev_from_mdev(m), sigmatau.tdev(y, rate=rate, data_type=data_type, confidence=confidence))
 
 
-def test_tdev_from_mdev_declines_what_tdev_would_say_differently():
+def testtdev_from_mdev_declines_what_tdev_would_say_differently():
     y = sigmatau.power_law_noise(2000, alpha=0, rng=4)
-    assert _tdev_from_mdev(sigmatau.mdev(y, ci=None)) is None
-    assert _tdev_from_mdev(sigmatau.mdev(y, alpha=0)) is not None  # forced α: edf from α, as tdev(alpha=0)
-    _assert_same(_tdev_from_mdev(sigmatau.mdev(y, alpha=0)), sigmatau.tdev(y, alpha=0))
+    assert tdev_from_mdev(sigmatau.mdev(y, ci=None)) is None
+    assert tdev_from_mdev(sigmatau.mdev(y, alpha=0)) is not None  # forced α: edf from α, as tdev(alpha=0)
+    _assert_same(tdev_from_mdev(sigmatau.mdev(y, alpha=0)), sigmatau.tdev(y, alpha=0))
     constant = sigmatau.mdev(np.ones(100))  # noise type not identified: tdev gives its own reason
-    assert np.isnan(constant.alpha).all() and _tdev_from_mdev(constant) is None
+    assert np.isnan(constant.alpha).all() and tdev_from_mdev(constant) is None
 
 
 def test_the_main_job_reports_the_tdev_of_tdev(rng):

@@ -62,6 +62,7 @@ BATCH = "sigmatau batch 'line3/*.csv' --out line3-fleet --limits lsm6dsl"
 BATCH_CLUSTER = ("sigmatau batch '/data/line3/*.csv' --out /data/line3-fleet "
                  "--scheduler tcp://10.0.0.5:8786")
 CHUNKED = "sigmatau stats month.npy --chunked --rate 1000 --stat oadev,mdev,totdev"
+OUT_OF_CORE = "sigmatau analyze day.npz --memory-limit 1GiB"
 HELP = "sigmatau COMMAND --help"
 EXPORT = "sigmatau analyze imu.csv --out imu-ekf --no-figures --export kalibr,vins,openvins,matlab,gtsam"
 COMPARE_TOUR = [
@@ -75,8 +76,8 @@ WATCH = [
     "sigmatau simulate imu.csv --preset lsm6dsl --duration 600",
     "sigmatau watch imu.csv --serve --until-idle 2 --out imu-live --no-figures",
 ]
-EXERCISED = {DEMO, *TOUR, EXPORT, BATCH, BATCH_CLUSTER, CHUNKED, HELP, *COMPARE_TOUR, COMPARE_LOGS, STABLE32_OUT,
-             *WATCH}
+EXERCISED = {DEMO, *TOUR, EXPORT, BATCH, BATCH_CLUSTER, CHUNKED, OUT_OF_CORE, HELP, *COMPARE_TOUR, COMPARE_LOGS,
+             STABLE32_OUT, *WATCH}
 
 
 def test_every_readme_command_is_exercised():
@@ -198,3 +199,17 @@ def test_readme_chunked_stats(tmp_path):
     r = _ok(CHUNKED, tmp_path)
     low = r.stdout.lower()
     assert "oadev" in low and "mdev" in low and "totdev" in low
+
+
+def test_readme_out_of_core(tmp_path):
+    rng = np.random.default_rng(20261207)
+    np.savez(tmp_path / "day.npz", gyro_x=rng.standard_normal(50_000) * 1e-3,
+             accel_x=rng.standard_normal(50_000) * 1e-2, rate=np.array(100.0))
+    # as printed: a day that fits in 1 GiB is analysed in memory …
+    r = _ok(OUT_OF_CORE, tmp_path)
+    assert "out of core" not in r.stdout and (tmp_path / "day-sigmatau" / "results.json").is_file()
+    # … and with a smaller budget the same command reads it in chunks and says so
+    r = _ok(OUT_OF_CORE.replace("1GiB", "1MiB") + " --out small --no-figures", tmp_path)
+    assert "note: analysed out of core, read in chunks of 65,536 samples" in r.stdout
+    memory = json.loads((tmp_path / "small" / "results.json").read_text())["settings"]["memory"]
+    assert memory["mode"] == "chunked" and memory["budget"] == 1 << 20

@@ -496,22 +496,32 @@ samples); 2 usage error (bad option value, unknown column or topic, output exist
 """
 
 
+def _analysis_options(args: argparse.Namespace, display: "_StepDisplay") -> dict[str, Any]:
+    """The keyword arguments of :func:`sigmatau.analysis.analyze_log` given by the options (shared by the
+    in-memory and the out-of-core runs of ``sigmatau analyze``)."""
+    return dict(statistics=args.stat, taus=args.taus, confidence=args.confidence, model=not args.no_model,
+                axis_rule=args.axis_rule, inflate=args.inflate, rostopic=args.rostopic,
+                datasheet=_datasheet(args.datasheet), workers=args.workers, progress=display.line,
+                theoh=args.theoh, theo1_bias=args.theo1_bias, on_step=display.event, prep=_preparation(args),
+                dynamic=_dynamic_spec(args), gauss_markov=args.gauss_markov)
+
+
 def _run_analysis(log: Any, args: argparse.Namespace, console: _Console, out: Path) -> int:
     from ..pipeline.analysis import analyze_log
-    from ..report.outputs import write_outputs
 
     display = _StepDisplay(console)
     try:
-        analysis = analyze_log(log, statistics=args.stat, taus=args.taus, confidence=args.confidence,
-                               model=not args.no_model, axis_rule=args.axis_rule, inflate=args.inflate,
-                               rostopic=args.rostopic, datasheet=_datasheet(args.datasheet), workers=args.workers,
-                               progress=display.line, theoh=args.theoh, theo1_bias=args.theo1_bias,
-                               on_step=display.event,
-                               prep=_preparation(args), dynamic=_dynamic_spec(args),
-                               gauss_markov=args.gauss_markov)
+        analysis = analyze_log(log, **_analysis_options(args, display))
     finally:
         display.close()
     protect = [] if log.source.format == "memory" else [log.source.path]
+    return _write_analysis(analysis, args, out, protect)
+
+
+def _write_analysis(analysis: Any, args: argparse.Namespace, out: Path, protect: Sequence[str]) -> int:
+    """Write the outputs of ``analysis`` (atomically) and print its summary."""
+    from ..report.outputs import write_outputs
+
     files = write_outputs(analysis, out, force=args.force, figures=_figure_formats(args),
                           report=not args.no_report, protect=protect, exports=_exports(args))
     _say(analysis.summary(), multiline=True)

@@ -4,6 +4,9 @@
 as gyro/accel/…, their units, the sample rate, the timestamps and a
 :class:`TimingReport` of jitter, gaps, duplicated and out-of-order samples and
 what was done about them. :func:`list_topics` lists the topics of a ROS bag.
+:func:`open_log` opens a log larger than memory as a :class:`DiskLog` (the same checks, the
+channels read in pieces; ``.npy``, stored ``.npz``, HDF5 and text) and :func:`log_size` tells a
+log's size from its headers before anything is read.
 
 Formats (see :func:`formats`): ``csv``, ``stable32``, ``npy``, ``npz`` with
 NumPy only; ``rosbag1`` and ``rosbag2`` (sqlite3 and MCAP) need the extra
@@ -48,6 +51,7 @@ Examples
 
 from __future__ import annotations
 
+from ._disk import DiskChannel, DiskLog, LogSize, OUT_OF_CORE_FORMATS, log_size, open_log
 from ._errors import FormatError, InputNotFoundError, InputWarning, MissingDependencyError, TimingWarning
 from ._limits import MAX_CHANNELS, MAX_LINE_CHARS, memory_budget
 from ._model import Gap, SensorLog, Source, TimingReport, TopicInfo
@@ -56,17 +60,24 @@ from ._registry import formats
 from ._units import DEFAULT_UNITS, GROUP_UNITS, SI_UNITS, TIME_UNITS
 # For the layers above (batch, chunked), outside __all__ so that ``from sigmatau.io import *``
 # gives what it gave before: read options checked without reading, a file's SHA-256, an
-# optional backend imported or named in one line.
+# optional backend imported or named in one line, a size in bytes in a short form.
 from ._errors import require_optional  # noqa: F401
 from ._read import check_read_options  # noqa: F401
 from ._registry import file_sha256  # noqa: F401
+from ._limits import fmt_bytes  # noqa: F401
 
 __all__ = [
     "read",
+    "open_log",
+    "log_size",
     "list_topics",
     "formats",
     "detect_format",
     "SensorLog",
+    "DiskLog",
+    "DiskChannel",
+    "LogSize",
+    "OUT_OF_CORE_FORMATS",
     "TimingReport",
     "Gap",
     "Source",

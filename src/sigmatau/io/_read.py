@@ -283,13 +283,8 @@ def _open_once(p: Path, display: str) -> OnceInput | None:
     return once
 
 
-def _read_table(p: Path, display: str, opts: Options, format: str | None, progress: bool | None,
-                once: OnceInput | None) -> Table:
-    if format is None:
-        name, auto = detect(p, display, head=None if once is None else once.head)
-    else:
-        name, auto = format, False
-    spec = get(name)
+def check_format_options(name: str, opts: Options, display: str) -> None:
+    """Refuse an option that does not apply to the format ``name`` (``dataset`` to a CSV …)."""
     for option, readers in _FORMAT_OPTIONS.items():
         if getattr(opts, option) is not None and name not in readers:
             flag = f"--{option.replace('_', '-')}"
@@ -302,6 +297,16 @@ def _read_table(p: Path, display: str, opts: Options, format: str | None, progre
             f"{display}: time_column= does not apply to ROS bags (nor --time-column);"
             f" use {option_hint('--stamps header|bag', 'stamps=')}"
         )
+
+
+def _read_table(p: Path, display: str, opts: Options, format: str | None, progress: bool | None,
+                once: OnceInput | None) -> Table:
+    if format is None:
+        name, auto = detect(p, display, head=None if once is None else once.head)
+    else:
+        name, auto = format, False
+    spec = get(name)
+    check_format_options(name, opts, display)
     text_reader = name in ("csv", "stable32")
     if once is not None and not text_reader:
         raise FormatError(
@@ -425,25 +430,33 @@ def _non_finite(data: dict[str, np.ndarray], names: dict[str, str], display: str
         bad = ~np.isfinite(v)
         if not bad.any():
             continue
-        called = repr(orig) if names[orig] == orig else f"{orig!r} ({names[orig]})"
         nan = np.isnan(v)
         inf = bad & ~nan
-        if inf.any():
-            i = int(np.flatnonzero(inf)[0])
-            raise DataError(f"{display}: column {called} holds {int(inf.sum())} infinite value(s) (first at sample"
-                            f" {i}); remove them from the file")
-        share = float(nan.mean())
-        if gaps == "mark" or (gaps == "auto" and share <= AUTO_MARK_SHARE):
-            kept += int(nan.sum())
-            continue
-        i = int(np.flatnonzero(nan)[0])
-        why = (f"{100 * share:.3g} % of the column, more than the {100 * AUTO_MARK_SHARE:g} % kept as gaps by default"
-               if gaps == "auto" else f"gaps={gaps!r}")
-        raise DataError(
-            f"{display}: column {called} holds {int(nan.sum())} NaN value(s) (first at sample {i}; {why});"
-            f" to keep them as missing samples use {option_hint('--gaps mark', repr_kw('gaps', 'mark'))}"
-        )
+        first_inf = int(np.flatnonzero(inf)[0]) if inf.any() else -1
+        kept += non_finite_column(display, orig, names[orig], gaps, v.size, int(nan.sum()),
+                                  int(np.flatnonzero(nan)[0]) if nan.any() else -1, int(inf.sum()), first_inf)
     return kept
+
+
+def non_finite_column(display: str, orig: str, name: str, gaps: str, rows: int, n_nan: int, first_nan: int,
+                      n_inf: int, first_inf: int) -> int:
+    """The rule of :func:`_non_finite` for one column from its counts: the NaN kept as gaps, or the
+    one-line error (also used by the out-of-core reader, which counts them chunk by chunk)."""
+    called = repr(orig) if name == orig else f"{orig!r} ({name})"
+    if n_inf:
+        raise DataError(f"{display}: column {called} holds {n_inf} infinite value(s) (first at sample"
+                        f" {first_inf}); remove them from the file")
+    if not n_nan:
+        return 0
+    share = n_nan / rows
+    if gaps == "mark" or (gaps == "auto" and share <= AUTO_MARK_SHARE):
+        return n_nan
+    why = (f"{100 * share:.3g} % of the column, more than the {100 * AUTO_MARK_SHARE:g} % kept as gaps by default"
+           if gaps == "auto" else f"gaps={gaps!r}")
+    raise DataError(
+        f"{display}: column {called} holds {n_nan} NaN value(s) (first at sample {first_nan}; {why});"
+        f" to keep them as missing samples use {option_hint('--gaps mark', repr_kw('gaps', 'mark'))}"
+    )
 
 
 def _grouped(data: dict[str, np.ndarray], names: dict[str, str],
@@ -510,25 +523,32 @@ def _declared_units(declared: Mapping[str, str], display: str, names: dict[str, 
             origin[name] = "declared"
 
 
+def untimed_report(table: Table, opts: Options, display: str) -> Any:
+    """The timing report of a table without a time column: the rate given or the file's (else the
+    one-line error asking for one)."""
+    rate = opts.rate if opts.rate is not None else table.rate
+    rate_source = "given" if opts.rate is not None else "file"
+    if opts.time_unit is not None:
+        raise ParameterError(f"{display}: time_unit={opts.time_unit!r} (--time-unit) given but the file has"
+                             " no time column")
+    if rate is None:
+        raise ParameterError(
+            f"{display}: no time column and no rate; give the rate in Hz with"
+            f" {option_hint('--rate HZ', 'rate=')} or the time column with"
+            f" {option_hint('--time-column NAME', 'time_column=')}"
+            f" (columns: {list_names(list(table.columns))})"
+        )
+    return untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
+                   gaps=opts.gaps, gap_threshold=opts.gap_threshold)
+
+
 def _timing(table: Table, opts: Options, display: str, channels: dict[str, np.ndarray],
             messages: list[tuple[str, type[Warning]]]) -> tuple[dict[str, np.ndarray], Any, Any, Any]:
     """Channels, timestamps, timing report and time origin: from the time column, or the rate alone."""
     rate = opts.rate if opts.rate is not None else table.rate
     rate_source = "given" if opts.rate is not None else "file"
     if table.time is None:
-        if opts.time_unit is not None:
-            raise ParameterError(f"{display}: time_unit={opts.time_unit!r} (--time-unit) given but the file has"
-                                 " no time column")
-        if rate is None:
-            raise ParameterError(
-                f"{display}: no time column and no rate; give the rate in Hz with"
-                f" {option_hint('--rate HZ', 'rate=')} or the time column with"
-                f" {option_hint('--time-column NAME', 'time_column=')}"
-                f" (columns: {list_names(list(table.columns))})"
-            )
-        report = untimed(table.rows, rate=rate, rate_source=rate_source, rows=table.rows,
-                         gaps=opts.gaps, gap_threshold=opts.gap_threshold)
-        return channels, None, report, None
+        return channels, None, untimed_report(table, opts, display), None
     assert table.time_name is not None
     check_times(table.time, name=table.time_name, path=display)
     if opts.time_unit is not None:

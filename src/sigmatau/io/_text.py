@@ -53,7 +53,7 @@ from ._sniff import (
     _DELIMITER_NAMES, _DELIMITERS, _COMMENTS, _INT, _Sniff, _check_lengths, _is_num, _lines, _read_head, _shown, _split, _strip_comment,
 )
 
-__all__ = ["read_csv", "read_stable32"]
+__all__ = ["read_csv", "read_stable32", "make_table", "row_layout"]
 
 CHUNK_ROWS = 1 << 16
 #: Use pyarrow's CSV parser for plain files when it is installed (False: always numpy's loadtxt).
@@ -186,10 +186,17 @@ def _loadtxt(lines: list[str], delimiter: str | None, comments: str | tuple[str,
 def _parse(path: Path, display: str, opts: Options, progress: Progress, flavour: str | None,
            hashing: _HashingReader, text: io.TextIOWrapper, head: list[str], sniff: _Sniff,
            compression: str, size: int | None) -> Table:
-    names = sniff.names
     cols = _choose_columns(display, opts, flavour, sniff)
     data, time, n, digest = _read_rows(path, display, opts, progress, hashing, text, head, sniff, cols,
                                        compression, size)
+    return make_table(path, display, opts, head, sniff, cols, compression, data, time, n, digest)
+
+
+def make_table(path: Path, display: str, opts: Options, head: list[str], sniff: _Sniff, cols: "_Columns",
+               compression: str, data: dict, time: np.ndarray | None, n: int, digest: tuple[str, int]) -> Table:
+    """The :class:`Table` of a text file from its parsed columns (``data``, ``time``: arrays, or for the
+    out-of-core reader (:mod:`._disktext`) readers of them) and what the sniffing found."""
+    names = sniff.names
     table = Table(
         format=cols.flavour, columns=tuple(names), data=data, rows=n, sha256=digest[0], size=digest[1],
         time=time, time_name=None if cols.time is None else names[cols.time],
@@ -255,6 +262,22 @@ def _stable32_columns(display: str, opts: Options, numeric_idx: list[int]) -> _C
     return _Columns("stable32", None, (numeric_idx[0],), None, (), ())
 
 
+def row_layout(sniff: _Sniff, cols: "_Columns") -> tuple[list[int], bool, np.dtype]:
+    """The columns to parse (the time column first), whether the time tags are integers beyond
+    2**53 (kept as int64), and the dtype :func:`_parse_chunk` gives numpy's loadtxt."""
+    time_idx, chans = cols.time, cols.channels
+    usecols = ([time_idx] if time_idx is not None else []) + list(chans)
+    int_time = False
+    if time_idx is not None:
+        values = [f[time_idx] for f in sniff.tail]
+        int_time = all(_INT.match(v) for v in values) and max(abs(int(v)) for v in values) > 2**53
+    if int_time:
+        dtype: np.dtype = np.dtype([("t", "<i8")] + [(f"c{k}", "<f8") for k in range(len(chans))])
+    else:
+        dtype = np.dtype(np.float64)
+    return usecols, int_time, dtype
+
+
 def _read_rows(path: Path, display: str, opts: Options, progress: Progress, hashing: _HashingReader,
                text: io.TextIOWrapper, head: list[str], sniff: _Sniff, cols: _Columns, compression: str,
                size: int | None) -> tuple[dict[str, np.ndarray], np.ndarray | None, int, tuple[str, int]]:
@@ -266,15 +289,7 @@ def _read_rows(path: Path, display: str, opts: Options, progress: Progress, hash
     """
     names = sniff.names
     time_idx, chans = cols.time, cols.channels
-    usecols = ([time_idx] if time_idx is not None else []) + list(chans)
-    int_time = False
-    if time_idx is not None:
-        values = [f[time_idx] for f in sniff.tail]
-        int_time = all(_INT.match(v) for v in values) and max(abs(int(v)) for v in values) > 2**53
-    if int_time:
-        dtype: np.dtype = np.dtype([("t", "<i8")] + [(f"c{k}", "<f8") for k in range(len(chans))])
-    else:
-        dtype = np.dtype(np.float64)
+    usecols, int_time, dtype = row_layout(sniff, cols)
 
     # Lines from the first data line on: the sniffed ones, then the rest of the file.
     start = sniff.data_line - 1

@@ -57,6 +57,11 @@ __all__ = [
     "log_from_arrays",
     "datasheet_reference",
     "json_ready",
+    "IN_MEMORY_PEAK",
+    "memory_needed",
+    "check_statistics",
+    "kalibr_entry",
+    "tdev_from_mdev",
 ]
 
 #: Statistics computed by default (the issue's choice: the overlapping and
@@ -222,6 +227,8 @@ def _value_unit(value: Any, what: str) -> tuple[float, str]:
 
 
 def check_statistics(statistics: Sequence[str]) -> tuple[str, ...]:
+    """``statistics`` (names, or one comma-separated string) checked against :data:`STATISTICS`, in
+    order, each once; a ParameterError naming the unknown one."""
     if isinstance(statistics, str):
         statistics = [s for s in statistics.replace(" ", "").split(",") if s]
     out = []
@@ -329,7 +336,7 @@ def _statistic(stat: str, x: np.ndarray, log: Any, taus: Any, confidence: float,
         results[stat] = model.result  # the very curve the model was fitted on
         return
     if stat == "tdev" and "mdev" in results:
-        derived = _tdev_from_mdev(results["mdev"])  # TVAR = τ²/3·MVAR: no second pass over the record
+        derived = tdev_from_mdev(results["mdev"])  # TVAR = τ²/3·MVAR: no second pass over the record
         if derived is not None:
             results[stat] = derived
             return
@@ -355,7 +362,7 @@ def _plan(log: Any, names: Sequence[str], stats: tuple[str, ...], model: bool) -
     return plan
 
 
-def _tdev_from_mdev(mdev_result: StabilityResult) -> Optional[StabilityResult]:
+def tdev_from_mdev(mdev_result: StabilityResult) -> Optional[StabilityResult]:
     """TDEV of a record from its MDEV result, without computing MVAR again.
 
     .. math:: σ_x^2(τ) = \\frac{τ^2}{3}\\,\\mathrm{Mod}\\,σ_y^2(τ),\\quad τ = mτ_0
@@ -521,7 +528,7 @@ def analyze_log(
                                    options, on_step, dynamic, gauss_markov)
     done = [_with_raw(dataclasses.replace(c, prep=prepared.records.get(c.name, ())), prepared.raw, log, taus,
                       float(confidence)) for c in done]
-    kalibr, kalibr_note = _kalibr_entry(done, model, axis_rule, inflate, rostopic)
+    kalibr, kalibr_note = kalibr_entry(done, model, axis_rule, inflate, rostopic)
     settings = {"statistics": list(stats), "channels": names, "taus": taus if isinstance(taus, str) else
                 list(np.asarray(taus, dtype=float)), "confidence": float(confidence), "ci": "chi2",
                 "model": bool(model), "axis_rule": axis_rule, "inflate": float(inflate), "rostopic": rostopic,
@@ -564,6 +571,29 @@ def _channel_names(log: Any, channels: Optional[Sequence[str]]) -> list[str]:
 WORKER_MEMORY = 4.5
 
 
+#: Peak memory of :func:`analyze_log` on a log it reads whole, in sizes of its samples as float64
+#: (every channel and the time column): measured on the 24 h 1 kHz six-channel log of
+#: bench/main_job.py (7.24 GB for 4.15 GB of samples) with the compiled kernels, 1.75; with the
+#: numpy kernels (no numba, or SIGMATAU_NUMBA=0) their record-sized temporaries make it about 2.6.
+IN_MEMORY_PEAK = {"compiled": 1.75, "numpy": 2.6}
+
+
+def memory_needed(rows: int, columns: int) -> int:
+    """Bytes the in-memory analysis of a log of ``rows`` × ``columns`` float64 values peaks at.
+
+    ``columns`` counts the channels and the time column. The factor is :data:`IN_MEMORY_PEAK`'s for
+    the kernels that would run: the compiled twins when numba imports and ``SIGMATAU_NUMBA`` is not
+    ``0`` on a record of at least :data:`sigmatau.core.accel.FUSED_MIN_POINTS` points.
+
+    >>> memory_needed(1000, 2) in (28000, 41600)
+    True
+    """
+    from ..core.accel import fused_for
+
+    kind = "compiled" if fused_for(rows) is not None else "numpy"
+    return int(math.ceil(8 * rows * columns * IN_MEMORY_PEAK[kind]))
+
+
 def _worker_count(workers: Optional[int], n_channels: int, channel_bytes: int = 0) -> int:
     """Threads to analyse the channels with: the request, else the usable cores as far as memory allows.
 
@@ -581,8 +611,8 @@ def _worker_count(workers: Optional[int], n_channels: int, channel_bytes: int = 
             if fits < 1:
                 warnings.warn(
                     f"the analysis needs about {need / 2**30:.1f} GiB beyond the loaded log and"
-                    f" {avail / 2**30:.1f} GiB are available: it may swap; `sigmatau stats --chunked`"
-                    " computes the Allan-family statistics without loading the record",
+                    f" {avail / 2**30:.1f} GiB are available: it may swap; `sigmatau analyze --memory chunked`"
+                    " (sigmatau.chunked.analyze_file) analyses the log without loading it",
                     SigmaTauWarning, stacklevel=caller_stacklevel())
             workers = max(1, min(workers, fits))
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -644,7 +674,7 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
     return done, seen
 
 
-def _kalibr_entry(done: Sequence[ChannelAnalysis], model: bool, axis_rule: str, inflate: float,
+def kalibr_entry(done: Sequence[ChannelAnalysis], model: bool, axis_rule: str, inflate: float,
                   rostopic: str) -> tuple[Optional[dict[str, Any]], str]:
     """The Kalibr values from the gyro and accel models (or None) and a note when there are none."""
     from ..imu.model import kalibr_config

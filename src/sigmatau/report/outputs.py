@@ -125,6 +125,18 @@ def _figure_cap_note(analysis: Any) -> str:
     return "figures limited to " + "; ".join(parts) + "; every channel is in results.json and the CSV tables"
 
 
+#: What a log analysed out of core has no figures of, and why.
+_OUT_OF_CORE_NOTE = ("signal figures (time series, spectrum, lag plot) not drawn: the log was analysed out of"
+                     " core and its samples were never held in memory; the σ–τ figures are complete")
+
+
+def _out_of_core(analysis: Any) -> bool:
+    """Whether the analysis read its log in chunks (a :class:`sigmatau.io.DiskLog`)."""
+    from ..io import DiskLog
+
+    return isinstance(analysis.log, DiskLog)
+
+
 def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[str, Any]]:
     """Write the figures (within the caps above); return their descriptions (file stem, caption, kind)."""
     from . import plots
@@ -146,7 +158,8 @@ def _figures(analysis: Any, folder: Path, formats: Sequence[str]) -> list[dict[s
                                 " intervals (bands), the fitted noise model and its terms, read-off points and"
                                 " slope guides"})
     log = analysis.log
-    chans = analysis.channels[:MAX_SIGNAL_FIGURES]
+    # A log read in chunks holds no samples: its signal figures would need them (_OUT_OF_CORE_NOTE).
+    chans = () if _out_of_core(analysis) else analysis.channels[:MAX_SIGNAL_FIGURES]
     # The passes over each record (envelope, PSD, lag-1 correlation) run in two threads, up to two
     # channels ahead, while this thread draws: matplotlib draws one figure at a time, numpy does not
     # need the GIL (a 24 h channel: 1.3 s of such passes against 0.9 s of drawing and saving).
@@ -255,6 +268,8 @@ def _write_all(analysis: Any, folder: Path, fmts: Sequence[str], report: bool, e
             figure_note = _figure_cap_note(analysis)
             if figure_note:
                 warnings.warn(figure_note, SigmaTauWarning, stacklevel=caller_stacklevel())
+            if _out_of_core(analysis):
+                figure_note = "; ".join(n for n in (figure_note, _OUT_OF_CORE_NOTE) if n)
     data = analysis.to_dict()
     data["figures"] = [{**f, "files": [f"{f['stem']}.{e}" for e in fmts]} for f in figs]
     if figure_note:
