@@ -636,8 +636,6 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
                       dynamic: Optional[tuple[float, float]] = None, gauss_markov: str = "auto",
                       ) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel analysed (in threads), and the distinct warnings they raised."""
-    from ..imu.model import ImuWarning
-
     plan = _plan(log, names, stats, model) if on_step is not None else {}
     total = sum(plan.values())
 
@@ -664,14 +662,22 @@ def _analyse_channels(log: Any, names: list[str], stats: tuple[str, ...], taus: 
                 done = list(pool.map(one, names))
     if not any(c.results for c in done):
         raise DataError(_nothing_computed(len(log), done[0]))
+    return done, distinct_warnings(caught)
+
+
+def distinct_warnings(caught: Sequence[Any]) -> list[str]:
+    """The distinct warnings recorded while channels were analysed, as ``"Category: message"``,
+    in order; IMU warnings are left out (already in the model's flags, with their channel)."""
+    from ..imu.model import ImuWarning
+
     seen: list[str] = []
     for w in caught:
-        if issubclass(w.category, ImuWarning):  # already in the model's flags, with their channel
+        if issubclass(w.category, ImuWarning):
             continue
         text = f"{w.category.__name__}: {w.message}"
         if text not in seen:
             seen.append(text)
-    return done, seen
+    return seen
 
 
 def kalibr_entry(done: Sequence[ChannelAnalysis], model: bool, axis_rule: str, inflate: float,

@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import DataError, ParameterError, SigmaTauError
 from ..uncertainty.confidence import ONE_SIGMA
-from ..pipeline.analysis import (DEFAULT_STATISTICS, STEP_COST, StepEvent, check_statistics, datasheet_reference,
+from ..pipeline.analysis import (DEFAULT_STATISTICS, distinct_warnings, STEP_COST, StepEvent, check_statistics, datasheet_reference,
                                  kalibr_entry, memory_needed, tdev_from_mdev)
 from ..pipeline.prepare import Preparation
 from ..pipeline.results import IMU_GROUPS, ChannelAnalysis, LogAnalysis
@@ -325,8 +325,6 @@ def _in_threads(log: Any, names: list[str], work: Callable[[str, Callable[[str, 
                 workers: int, progress: Optional[Callable[[str], None]],
                 on_step: Optional[Callable[[StepEvent], None]], plan: dict) -> tuple[list[ChannelAnalysis], list[str]]:
     """Every channel (in threads), the distinct warnings raised; an interruption cancels the reads."""
-    from ..imu.model import ImuWarning
-
     total = sum(plan.values())
 
     def one(name: str) -> ChannelAnalysis:
@@ -354,14 +352,7 @@ def _in_threads(log: Any, names: list[str], work: Callable[[str, Callable[[str, 
         except BaseException:
             log.cancel()
             raise
-    seen: list[str] = []
-    for w in caught:
-        if issubclass(w.category, ImuWarning):
-            continue
-        text = f"{w.category.__name__}: {w.message}"
-        if text not in seen:
-            seen.append(text)
-    return done, seen
+    return done, distinct_warnings(caught)
 
 
 def analyze_disk_log(
