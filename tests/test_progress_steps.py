@@ -93,7 +93,7 @@ def test_default_workers_fit_in_the_memory_available(monkeypatch):
     assert analysis._worker_count(None, 6, gib) == 2  # 4.5 GiB per worker
     assert analysis._worker_count(3, 6, gib) == 3  # an explicit request stands
     monkeypatch.setattr(analysis, "available_memory", lambda: 1.0 * gib)
-    with pytest.warns(SigmaTauWarning, match=r"needs about 4\.5 GiB .* 1\.0 GiB are available.*--chunked"):
+    with pytest.warns(SigmaTauWarning, match=r"needs about 4\.5 GiB .* 1\.0 GiB are available.*--memory chunked"):
         assert analysis._worker_count(None, 6, gib) == 1
     monkeypatch.setattr(analysis, "available_memory", lambda: None)  # unknown: the cores
     assert analysis._worker_count(None, 6, gib) == 4
