@@ -83,6 +83,7 @@ def _every_statistic(y, data_type, rate):
             for name in sigmatau.stats.FUNCTIONS}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 @pytest.mark.parametrize("alpha", [2, 0, -2])
 def test_statistics_in_a_shared_scope_are_bit_for_bit_those_outside(alpha, data_type):

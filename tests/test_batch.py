@@ -92,6 +92,7 @@ def fleet(logs, client, tmp_path_factory):
                         limits="lsm6dsl", progress=False)
 
 
+@pytest.mark.slow
 def test_every_log_once_and_the_corrupt_one_reported(fleet, logs):
     out = fleet.out
     assert len(fleet.records) == N_LOGS and len(fleet.errors) == 1 and not fleet.ok
@@ -110,6 +111,7 @@ def test_every_log_once_and_the_corrupt_one_reported(fleet, logs):
         assert (out / name).is_file(), name
 
 
+@pytest.mark.slow
 def test_numbers_equal_single_machine_analysis(fleet):
     """Each log's model in the fleet (record and fleet.csv) is analyze_log's, in SI."""
     rows = _csv_rows(fleet.out / "fleet.csv")
@@ -137,6 +139,7 @@ def test_numbers_equal_single_machine_analysis(fleet):
                 assert rec["kalibr"][key] == pytest.approx(value, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_outliers_limits_and_report(fleet):
     limit = 1.5 * convert(4.0, "mdps/sqrt(Hz)", "rad/s/sqrt(Hz)")
     verdicts = {Path(r["path"]).stem: r["verdict"] for r in fleet.records}
@@ -161,6 +164,7 @@ def test_outliers_limits_and_report(fleet):
     assert [r["error_type"] for r in logs_csv if r["status"] == "error"] == ["FormatError"]
 
 
+@pytest.mark.slow
 def test_rerun_skips_everything_done(fleet, logs, client):
     before = {d.name: (d / "record.json").stat().st_mtime_ns for d in _result_dirs(fleet.out)}
     again = analyze_many([str(logs / "*.csv")], fleet.out, client=client, statistics=STATS, figures=None,
@@ -172,6 +176,7 @@ def test_rerun_skips_everything_done(fleet, logs, client):
         analyze_many([str(logs / "*.csv")], fleet.out, client=client, statistics="oadev,mdev", figures=None)
 
 
+@pytest.mark.slow
 def test_results_of_other_settings_are_never_reused(logs, client, tmp_path):
     """A forced rerun of some logs with new settings must not make a later run reuse the others'
     old-settings results (they are recomputed)."""
@@ -185,6 +190,7 @@ def test_results_of_other_settings_are_never_reused(logs, client, tmp_path):
         assert json.loads((d / "results.json").read_text())["settings"]["statistics"] == ["mdev"]
 
 
+@pytest.mark.slow
 def test_estimator_files_per_log(logs, client, tmp_path):
     """--export reaches every log's folder: the files asked for, and Kalibr's only when asked."""
     out = tmp_path / "o"
@@ -200,6 +206,7 @@ def test_estimator_files_per_log(logs, client, tmp_path):
     assert not (tmp_path / "bad").exists()
 
 
+@pytest.mark.slow
 def test_a_foreign_directory_is_not_used_as_out(logs, client, tmp_path):
     out = tmp_path / "proj"
     (out / "logs" / ".keepme").mkdir(parents=True)
@@ -209,6 +216,7 @@ def test_a_foreign_directory_is_not_used_as_out(logs, client, tmp_path):
     assert (out / "logs" / ".keepme" / "notes.txt").read_text() == "important"
 
 
+@pytest.mark.slow
 def test_interrupted_run_resumes_without_duplicates(logs, client, tmp_path):
     out = tmp_path / "out"
     seen: list[str] = []
@@ -269,6 +277,7 @@ def test_a_worker_killed_mid_run(logs, tmp_path):
     assert len(dirs) == N_LOGS and not [d for d in dirs if d.name.startswith(".")]
 
 
+@pytest.mark.slow
 def test_cli_on_an_existing_scheduler(logs, client, tmp_path, capsys):
     out = tmp_path / "cli"
     argv = ["batch", str(logs / "log0*.csv"), str(logs / "corrupt.csv"), "--out", str(out),
@@ -327,6 +336,7 @@ def test_limits_from_preset_and_files(tmp_path):
             load_limits(bad)
 
 
+@pytest.mark.slow
 def test_import_sigmatau_loads_no_dask_and_missing_dask_is_named(monkeypatch):
     code = "import sys, sigmatau, sigmatau.batch, sigmatau.cli.app; sigmatau.cli.app._parser(); " \
            "print([m for m in sys.modules if m.split('.')[0] in ('dask', 'distributed')])"

@@ -116,6 +116,7 @@ def _copy(out: Path, dest: Path) -> Path:
 # ------------------------------------------------------------------ 1. the default local cluster
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [["--workers", "2"], ["--workers", "1"], []])
 def test_default_local_cluster_from_the_cli(fleet, tmp_path, workers):
     """Issue 11 #1: exit 3 'No clients found' on every run with the default local cluster."""
@@ -132,6 +133,7 @@ def test_default_local_cluster_from_the_cli(fleet, tmp_path, workers):
     assert all(e["status"] == "ok" for e in index)
 
 
+@pytest.mark.slow
 def test_api_local_cluster_is_not_made_the_default(fleet, tmp_path):
     _no_default_client()
     f = analyze_many(str(fleet / "fleet" / "*.csv"), tmp_path / "o", workers=1, statistics="oadev", figures=None,
@@ -140,6 +142,7 @@ def test_api_local_cluster_is_not_made_the_default(fleet, tmp_path):
     _no_default_client()  # batch's client did not become the process default
 
 
+@pytest.mark.slow
 def test_api_with_a_client_that_is_not_the_default(fleet, client, tmp_path):
     f = analyze_many(str(fleet / "fleet" / "*.csv"), tmp_path / "o", client=client, statistics="oadev",
                      figures=None, report=False, fleet_figures=False, progress=False)
@@ -150,6 +153,7 @@ def test_api_with_a_client_that_is_not_the_default(fleet, client, tmp_path):
 # ------------------------------------------------------------------------------ 2. resources
 
 
+@pytest.mark.slow
 def test_workers_capped_by_cores_and_logs(fleet, tmp_path, monkeypatch):
     """Issue 11 #10: --workers 64 started 64 processes for two logs."""
     started = []
@@ -171,6 +175,7 @@ def test_workers_capped_by_cores_and_logs(fleet, tmp_path, monkeypatch):
     assert len(ours) == 1 and re.match(rf"workers=64 capped to {want}\b", ours[0]) and "\n" not in ours[0]
 
 
+@pytest.mark.slow
 def test_cli_says_once_that_workers_are_capped(fleet, tmp_path):
     r = _run(["batch", "fleet/*.csv", "--out", str(tmp_path / "o"), "--workers", "64", *LEAN], fleet)
     assert r.returncode == 0, r.stderr
@@ -181,6 +186,7 @@ def test_cli_says_once_that_workers_are_capped(fleet, tmp_path):
 # ------------------------------------------------------------------- 3. scheduler, lock, index
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("address", ["not a url", "foo", "tcp://", "tcp://host:port", "tcp://h:99999",
                                      "http://127.0.0.1:8786", "tcp://a b:8786"])
 def test_malformed_scheduler_address_fails_fast_creating_nothing(fleet, tmp_path, address):
@@ -242,6 +248,7 @@ def _lock(out: Path, **fields) -> Path:
     return path
 
 
+@pytest.mark.slow
 @linux_only
 def test_live_lock_refuses_in_one_line(done, fleet, tmp_path, sleeper):
     out = _copy(done, tmp_path / "OUT")
@@ -264,6 +271,7 @@ def _dead_pid() -> tuple[int, int]:
     return p.pid, ticks
 
 
+@pytest.mark.slow
 @linux_only
 @pytest.mark.parametrize("case", ["dead pid", "pid reused", "other boot", "old format, pid reused"])
 def test_stale_lock_is_taken_over(done, fleet, tmp_path, sleeper, case):
@@ -285,6 +293,7 @@ def test_stale_lock_is_taken_over(done, fleet, tmp_path, sleeper, case):
     assert json.loads((out / "fleet.json").read_text())["reused"] == 2
 
 
+@pytest.mark.slow
 @linux_only
 def test_old_format_lock_of_a_live_process_still_holds(done, fleet, tmp_path, sleeper):
     out = _copy(done, tmp_path / "OUT")
@@ -293,6 +302,7 @@ def test_old_format_lock_of_a_live_process_still_holds(done, fleet, tmp_path, sl
     assert r.returncode == 2 and f"process {sleeper.pid}" in _one_error_line(r)
 
 
+@pytest.mark.slow
 def test_lock_written_by_a_run_names_the_process(fleet, client, tmp_path):
     """While a run holds it, the lock says who (PID, start time where the system has one, boot id)."""
     seen = []
@@ -308,6 +318,7 @@ def test_lock_written_by_a_run_names_the_process(fleet, client, tmp_path):
     assert not (tmp_path / "o" / "batch.lock").exists()
 
 
+@pytest.mark.slow
 def test_index_has_one_line_per_log_and_content(fleet, client, tmp_path):
     """Issue 11 #11: every rerun appended another error line for the same unreadable log."""
     src = tmp_path / "in"
@@ -341,6 +352,7 @@ def _is_number(cell: str) -> bool:
     return True
 
 
+@pytest.mark.slow
 def test_fleet_csvs_never_start_a_formula(fleet, client, tmp_path):
     """Issue 11 #13 (OWASP CSV injection): log names and messages start cells with - = + @."""
     src = tmp_path / "in"
@@ -374,6 +386,7 @@ def _limit_cell(out: Path, group: str, term: str) -> float:
     return float(cells.pop())
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("margin", ["1.5", "2", "0.5"])
 def test_limit_margin(done, fleet, tmp_path, margin):
     out = _copy(done, tmp_path / "OUT")
@@ -383,6 +396,7 @@ def test_limit_margin(done, fleet, tmp_path, margin):
     assert _limit_cell(out, "gyro", "N") == pytest.approx(float(margin) * LSM6DSL_GYRO_N, rel=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("margin", ["0", "-1", "nan", "inf", "x"])
 def test_bad_limit_margin(fleet, tmp_path, margin):
     out = tmp_path / "OUT"
@@ -402,6 +416,7 @@ GOOD_LIMITS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(GOOD_LIMITS))
 def test_limits_files(done, fleet, tmp_path, name):
     (tmp_path / name).write_text(GOOD_LIMITS[name], encoding="utf-8", newline="")
@@ -433,6 +448,7 @@ BAD_LIMITS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(BAD_LIMITS))
 def test_malformed_limits_files(fleet, tmp_path, name):
     text, message = BAD_LIMITS[name]

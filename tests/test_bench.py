@@ -77,6 +77,7 @@ def test_verdicts(bench):
     assert "## Targets" in text and "| classic | 300 |" in text
 
 
+@pytest.mark.slow
 def test_tiny_run_end_to_end(bench, tmp_path):
     pytest.importorskip("allantools")
     out = tmp_path / "smoke.md"

@@ -62,6 +62,7 @@ def test_matches_in_memory(stat, data_type, noise):
     _assert_same(got, ref)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 def test_statistics_of_one_series_share_its_noise_identification(data_type, monkeypatch):
     """Every statistic computed on one ChunkedSeries reuses the noise identification the others
@@ -95,6 +96,7 @@ def test_statistics_of_one_series_share_its_noise_identification(data_type, monk
     assert with_sharing["b1"] <= calls["b1"], (with_sharing, calls)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stat", ["mdev", "oadev", "ohdev"])
 @pytest.mark.parametrize("noise", ["WFM", "RWFM"])
 def test_long_record_frequency(stat, noise):
@@ -217,6 +219,7 @@ def test_hdf5_dataset(tmp_path):
     assert _sha256(path) == before
 
 
+@pytest.mark.slow
 def test_dask_array():
     da = pytest.importorskip("dask.array")
     y = _series("WPM", "freq", 30_011)
@@ -364,6 +367,7 @@ def test_import_sigmatau_loads_neither_chunked_nor_dask():
 # --------------------------------------------------------------------- memory
 
 
+@pytest.mark.slow
 def test_peak_memory_follows_the_chunk_not_the_record(tmp_path):
     # A real property of the algorithm: every pass holds a fixed number of
     # chunk-sized arrays (about 30 for MDEV of frequency data, the deepest).

@@ -106,6 +106,7 @@ def _assert_same_outcome(func: Callable, data: np.ndarray, chunk: int, **options
 # ---------------------------------------------------------------- equality grid
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pattern", sorted(PATTERNS))
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 @pytest.mark.parametrize("stat", chunked.STATISTICS)
@@ -133,6 +134,7 @@ def test_every_pattern_at_once_and_every_statistic(noise, data_type, rng):
         _assert_same(got, ref)
 
 
+@pytest.mark.slow
 def test_factors_far_above_the_chunk(rng):
     # m up to 60 times the chunk; gaps across the reads of every offset (0, m, 2m, 3m).
     clean = _record("FFM", "freq", 8009, rng)
@@ -198,6 +200,7 @@ def test_totdev_bias(bias, data_type, rng):
 # ------------------------------------------------------------ noise identification
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("stat", ["oadev", "mdev", "hdev", "ohdev"])
 def test_few_blocks_present_streams_b1(stat, rng):
     # A record mostly missing: at the longer factors fewer than 30 block means are present

@@ -146,6 +146,7 @@ def test_simulate_usage_errors(tmp_path, capsys, monkeypatch, argv, pattern):
 # ----------------------------------------------------------------------- analyze
 
 
+@pytest.mark.slow
 def test_analyze_writes_every_output(analyzed):
     names = {p.name for p in analyzed.iterdir()}
     assert {"results.json", "statistics.csv", "model.csv", "imu.yaml", "report.html"} <= names
@@ -159,6 +160,7 @@ def test_analyze_writes_every_output(analyzed):
     assert (analyzed / f"sigma_tau_gyro.pdf").read_bytes()[:5] == b"%PDF-"
 
 
+@pytest.mark.slow
 def test_results_json_records_everything(analyzed, imu_csv):
     data = json.loads((analyzed / "results.json").read_text())
     assert data["tool"] == {"name": "sigmatau", "version": __version__}
@@ -186,6 +188,7 @@ def test_results_json_records_everything(analyzed, imu_csv):
     assert data["figures"] and all(f["files"] for f in data["figures"])
 
 
+@pytest.mark.slow
 def test_statistics_and_model_csv(analyzed):
     with open(analyzed / "statistics.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -200,6 +203,7 @@ def test_statistics_and_model_csv(analyzed):
     assert any(r["unit"] == "deg/sqrt(h)" for r in model)
 
 
+@pytest.mark.slow
 def test_kalibr_yaml_is_valid_and_states_the_rule(analyzed):
     text = (analyzed / "imu.yaml").read_text()
     doc = yaml.safe_load(text)
@@ -214,6 +218,7 @@ def test_kalibr_yaml_is_valid_and_states_the_rule(analyzed):
     assert doc["gyroscope_noise_density"] == pytest.approx(max(per_axis), rel=1e-6)
 
 
+@pytest.mark.slow
 def test_report_html_is_self_contained(analyzed):
     html = (analyzed / "report.html").read_text()
     assert html.startswith("<!DOCTYPE html>")
@@ -229,6 +234,7 @@ def test_report_html_is_self_contained(analyzed):
     assert "Data checks" in html and "Noise model" in html and "AF" in html
 
 
+@pytest.mark.slow
 def test_analyze_summary_on_stdout(imu_csv, tmp_path, capsys):
     code, out, err = _run(["analyze", imu_csv, "--out", tmp_path / "o", "--stat", "oadev", "--no-figures",
                            "--axis-rule", "rms", "--quiet"], capsys)
@@ -240,6 +246,7 @@ def test_analyze_summary_on_stdout(imu_csv, tmp_path, capsys):
     assert err == ""  # quiet, and no warnings on stderr (flags are in the summary)
 
 
+@pytest.mark.slow
 def test_output_directory_policy(imu_csv, tmp_path, capsys, monkeypatch):
     out = tmp_path / "o"
     out.mkdir()
@@ -315,6 +322,7 @@ def test_force_never_deletes_the_input(tmp_path, imu_csv, capsys):
     assert _digest(log) == _digest(imu_csv)
 
 
+@pytest.mark.slow
 def test_failure_while_writing_leaves_nothing(imu_csv, tmp_path, capsys, monkeypatch):
     from sigmatau.report import plots
 
@@ -460,6 +468,7 @@ def test_stats_stable32_phase_file(tmp_path, capsys):
 # ------------------------------------------------------------------------- demo
 
 
+@pytest.mark.slow
 def test_demo_runs_the_full_analysis(tmp_path, capsys):
     out = tmp_path / "demo"
     code, stdout, err = _run(["demo", "--out", out, "--duration", "600", "--rate", "52", "--quiet"], capsys)
@@ -489,6 +498,7 @@ ADIS = Path(__file__).resolve().parents[2] / "shared" / "refdata" / "imu" / "sma
     "adis_16405_imu1.csv.gz"
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not ADIS.exists(), reason=f"{ADIS} not available (CC BY-NC-SA data, read in place only)")
 def test_analyze_real_adis16405_log(tmp_path, capsys):
     """A real 1e6-row gzip CSV (no time column, units in the names): read in place, never copied."""
@@ -571,6 +581,7 @@ def test_same_numbers_from_every_format(tmp_path, capsys):
             assert dev == pytest.approx(ref[key], rel=1e-12), (kind, key)
 
 
+@pytest.mark.slow
 def test_datasheet_numbers_and_units(imu_csv, tmp_path, capsys):
     code, out, err = _run(["analyze", imu_csv, "--out", tmp_path / "o", "--stat", "oadev", "--no-figures",
                            "--datasheet", "gyro.N=0.24 deg/sqrt(h)", "--datasheet", "accel.N=80 ug/sqrt(Hz)"],
@@ -582,6 +593,7 @@ def test_datasheet_numbers_and_units(imu_csv, tmp_path, capsys):
     _one_line_error(err, "gyro.N")
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
 def test_without_matplotlib_everything_but_the_figures_is_written(imu_csv, tmp_path, capsys, monkeypatch):
     """`pip install sigmatau` without the plot extra: a warning names the extra, the rest is written."""
@@ -632,6 +644,7 @@ def test_stats_chunked_equals_in_memory(tmp_path, capsys):
 # ------------------------------------------------------------- options tested end to end
 
 
+@pytest.mark.slow
 def test_axis_rule_mean(imu_csv, tmp_path, capsys):
     out = tmp_path / "o"
     code, _, err = _run(["analyze", imu_csv, "--out", out, "--stat", "oadev", "--no-figures", "--no-report",
@@ -683,6 +696,7 @@ def test_unsorted_and_duplicates_policies(policy, tmp_path, capsys):
     _one_line_error(err, "bad.csv", warned, keep)
 
 
+@pytest.mark.slow
 def test_kalibr_from_fewer_than_three_axes_says_so(imu_csv, tmp_path, capsys):
     # Kalibr's values stand for all three axes; a log with two gyro axes must say so (the reader
     # already warns about the column it left out).

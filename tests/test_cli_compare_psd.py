@@ -42,6 +42,7 @@ def rig(tmp_path_factory):
     return path, cols
 
 
+@pytest.mark.slow
 def test_compare_prints_and_writes_the_library_result(rig, tmp_path, capsys):
     path, cols = rig
     out = tmp_path / "hat"

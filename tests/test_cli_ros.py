@@ -52,6 +52,7 @@ def bags(tmp_path_factory):
     return out, gyro, accel
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", KINDS)
 def test_analyze_bag_end_to_end(bags, kind, tmp_path, capsys):
     paths, gyro, _ = bags

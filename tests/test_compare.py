@@ -244,6 +244,7 @@ def _assert_nominal(cov, trials, p=ONE_SIGMA):
     assert np.all(np.abs(cov - p) <= tol), (cov, p, tol)
 
 
+@pytest.mark.slow
 def test_coverage_quiet_clock_small():
     # 1 : 10 : 10 in deviation at m = 64 (ν ≈ 44.7); the quiet clock's classical estimate is negative
     # about half the time, yet its interval must cover at the nominal rate.

@@ -82,6 +82,7 @@ def test_fast_statistics_match(name, data_type, noise):
         _compare(name, data, rate=RATE, data_type=data_type, taus=taus)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("noise", ["WPM", "FFM", "RWFM", "RRFM"])
 @pytest.mark.parametrize("data_type", ["phase", "freq"])
 @pytest.mark.parametrize("name", SLOW)

@@ -63,6 +63,7 @@ def test_each_cell_is_the_statistic_of_its_window(statistic, data_type):
         np.testing.assert_array_equal(r.n[j], plain.n)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", ["wpm", "fpm", "wfm", "ffm", "rwfm"])
 @pytest.mark.parametrize("window, step", [(1500, 350), (1500, 1500), (1000, 2000), (600, 1)])
 def test_cumulative_oadev_equals_the_per_window_path(kind, window, step):
@@ -140,6 +141,7 @@ def _binomial_bound(trials: int) -> int:
     return int(binom.ppf(0.999, trials, LEVEL))
 
 
+@pytest.mark.slow
 def test_stationary_white_noise_is_not_flagged_beyond_the_nominal_rate():
     trials = 150
     alarms = _false_alarms("wfm", trials, 1000)

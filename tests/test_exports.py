@@ -85,6 +85,7 @@ def test_vins_values_are_per_sample_standard_deviations(analysis, tmp_path):
     assert analysis.kalibr["inflation"] == 1.5 and expected["gyr_n"] > 0
 
 
+@pytest.mark.slow
 def test_vins_matches_a_simulated_per_sample_noise():
     """VINS's acc_n is the standard deviation of each sample: a white noise of that σ per sample
     at f Hz has the density N = σ/√f that sigmatau measures, and the file gives σ back."""
@@ -246,6 +247,7 @@ def test_unknown_target_and_no_model(analysis):
         export_text(bare, "gtsam")
 
 
+@pytest.mark.slow
 def test_cli_writes_the_files_asked_for(tmp_path, capsys):
     code, _, err = run_cli(["simulate", tmp_path / "imu.csv", "--preset", "lsm6dsl", "--duration", "120"], capsys)
     assert code == 0, err

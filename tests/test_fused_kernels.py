@@ -87,6 +87,7 @@ def test_phase_kernels_match_numpy(alpha, n, dense):
             _assert_close(getattr(fused, name)(x, ms, 0.01), _numpy(kernel, x, ms, 0.01), f"{name} alpha={alpha}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", ALPHAS)
 @pytest.mark.parametrize("n, dense", [(1000, True), (131_073, False)])
 def test_frequency_kernels_match_numpy(alpha, n, dense):
@@ -192,6 +193,7 @@ def _assert_same_statistic(fast, slow, what):
     assert fast.ci_reason == slow.ci_reason and fast.bias == slow.bias, what
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("ignore::sigmatau.SigmaTauWarning")  # TheoH's Fast TheoBR on phase noise says so
 @pytest.mark.parametrize("alpha", [2, 1, 0, -1, -2])
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
@@ -280,6 +282,7 @@ def test_the_scope_forms_other_sums_only_for_the_statistics_it_names(monkeypatch
     assert rows[("oadev", "ohdev", "totdev", "theoh")] > 0 and rows[None] > 0
 
 
+@pytest.mark.slow
 def test_the_main_job_with_and_without_numba(monkeypatch):
     channels = {"gyro_x": _noise(150_000, 0, "freq", seed=1), "gyro_y": _noise(150_000, -1, "freq", seed=2)}
     log = log_from_arrays(channels, rate=200.0, units={"gyro_x": "rad/s", "gyro_y": "rad/s"})

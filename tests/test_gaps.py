@@ -77,6 +77,7 @@ def _window_oracle(name, data, data_type, m, points):
     return float(np.mean(values)), len(windows)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 @pytest.mark.parametrize("name", sorted(FREQ_WINDOW))
 def test_window_statistics_equal_the_mean_over_gap_free_windows(name, data_type):
@@ -278,6 +279,7 @@ def test_noise_identification_tolerates_gaps(alpha):
     assert part.alpha.tolist() == full.alpha.tolist() or alpha in (1, 2)
 
 
+@pytest.mark.slow
 def test_interval_coverage_with_gaps_on_the_default_path():
     # White FM with 5 % of the samples missing (scattered and one burst), noise type identified
     # (not forced): the 68.3 % interval of OADEV must cover the true σ_y(τ) = 1/√m at about

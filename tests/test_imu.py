@@ -241,6 +241,7 @@ def test_too_short_raises_a_clear_error():
 # ------------------------------------------------------------- inputs and units
 
 
+@pytest.mark.slow
 def test_units_scale_counts_and_increments(euroc_gyro):
     y, m = euroc_gyro
     part = y[:360_000]
@@ -397,6 +398,7 @@ def test_parameter_formatting():
 RATE_POWER = {"Q": -1.0, "N": -0.5, "B": 0.0, "K": 0.5, "R": 1.0}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("rate", [1e-8, 1e-3, 1e3, 1e5, 1e8])
 def test_model_follows_the_rate_exactly(rate):
     # The same 2,000 samples declared at another rate: every value, bound and interval end scales
@@ -415,6 +417,7 @@ def test_model_follows_the_rate_exactly(rate):
                 assert got / factor == pytest.approx(ref, rel=1e-10), (t, got, ref)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("exponent", [-150, -50, 50, 150])
 def test_model_scale_equivariant_or_refused(exponent):
     y = simulate(duration=2000, rate=10, unit="rad/s", rng=3, N=1e-3, B=2.75e-4, K=1.8e-5)

@@ -127,6 +127,7 @@ def _nominal(kind: str, conf: float = 0.683) -> float:
     return conf if kind == "interval" else 0.5 * (1.0 + conf)
 
 
+@pytest.mark.slow
 def test_k_and_r_sharing_the_end_fast():
     """K and R sharing the end of the record (the issue's case): the printed
     statement for each (interval when resolved, upper bound when not) holds at
@@ -180,6 +181,7 @@ def _copula_curves(truth: dict, rng: np.random.Generator, draws: int):
         yield from_curve(taus, np.sqrt(parts.sum(axis=1) * x), rate=GRID_RATE, n_samples=n)
 
 
+@pytest.mark.slow
 def test_dropped_k_bound_holds_given_the_drop_fast(rng):
     """The upper bound printed for a K that the term selection dropped holds at its nominal rate
     (84.1 %, the upper end of the 68.3 % interval) among the runs that drop it: N+B+K+R, whose K
@@ -262,6 +264,7 @@ def test_grid_coverage(config):
         assert abs(k / n - _nominal(key[2])) > 0.05, (key, k, n, measured)
 
 
+@pytest.mark.slow
 def test_b_readoff_unbiased_between_n_and_k_fast():
     """The B read-off (flat region, σ/0.6643) between N and K is unbiased once the
     fitted neighbouring terms' share is subtracted from each point of its region.

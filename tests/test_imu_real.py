@@ -53,6 +53,7 @@ def adis():
     return models
 
 
+@pytest.mark.slow
 @needs_adis
 def test_adis16405_gyros(adis):
     for model, _ in adis[:3]:
@@ -100,6 +101,7 @@ def _curve(sensor: str, kind: str, axis: str):
     return from_curve(t, dev, rate=rate, n_samples=n)
 
 
+@pytest.mark.slow
 @needs_curves
 @pytest.mark.parametrize("sensor", SENSORS)
 def test_imu_utils_curves_run_end_to_end(sensor):
@@ -117,6 +119,7 @@ def test_imu_utils_curves_run_end_to_end(sensor):
             json.dumps(m.to_dict())
 
 
+@pytest.mark.slow
 @needs_curves
 def test_adis16448_curves_match_the_euroc_and_datasheet_figures():
     with warnings.catch_warnings():

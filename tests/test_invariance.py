@@ -166,6 +166,7 @@ def test_constant_data_gives_zero(name: str, value: float, n: int, rate: float, 
         np.testing.assert_array_equal(result.dev, 0.0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", NAMES)
 @SETTINGS
 @given(data=st.data(), rate=RATES, data_type=st.sampled_from(["freq", "phase"]))

@@ -805,6 +805,7 @@ def test_list_topics_refuses_non_bags(tmp_path):
 # Real recordings from ../shared/refdata/imu (read in place; skipped when absent)
 # ---------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 @pytest.mark.skipif(not ADIS.exists(), reason="shared/refdata/imu not present")
 def test_real_adis16405_recording():
     log = _quiet_read(ADIS, rate=100)

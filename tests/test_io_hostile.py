@@ -251,6 +251,7 @@ def test_fifo_gzip_and_binary_and_empty(tmp_path):
     _check(e, DataError, "z.fifo", "empty")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["stats", "analyze"])
 def test_dev_stdin_through_a_pipe_keeps_every_sample(tmp_path, command):
     """``cat log.csv | sigmatau stats /dev/stdin``: every one of the 3,000 samples is there."""
@@ -421,6 +422,7 @@ def test_hdf5_declared_rows_beyond_memory(tmp_path, monkeypatch):
     _check(e, DataError, "big.h5", "1 column\\(s\\) of 100,000,000,000 rows needs", "refused before allocating")
 
 
+@pytest.mark.slow
 def test_ten_thousand_columns_capped_with_a_way_out(tmp_path, capsys):
     """Defect: a 10,000-column CSV planned 20,000 figures and ran for minutes."""
     k = 10_000

@@ -49,6 +49,7 @@ def logs(tmp_path_factory):
     return clean, dropped, int((~keep).sum())
 
 
+@pytest.mark.slow
 def test_dropped_samples_give_the_clean_records_terms(logs):
     clean_path, dropped_path, missing = logs
     clean = analyze_log(io.read(clean_path), statistics="oadev,mdev,totdev,theoh")
@@ -96,6 +97,7 @@ def test_preparation_steps_in_order_with_records(logs):
     assert log.channels["gyro_x"][0] == drifted["gyro_x"][0]  # the input log is untouched
 
 
+@pytest.mark.slow
 def test_cli_preparation_options_and_errors(logs, tmp_path, capsys):
     clean_path, _, _ = logs
     out = tmp_path / "o"
@@ -117,6 +119,7 @@ def test_cli_preparation_options_and_errors(logs, tmp_path, capsys):
         assert not (tmp_path / "x").exists()
 
 
+@pytest.mark.slow
 def test_dynamic_stability_in_the_main_job(tmp_path, capsys):
     from sigmatau.analysis import log_from_arrays
 
@@ -185,6 +188,7 @@ def warm_and_ramp(tmp_path_factory):
     return d / "clean.csv", d / "env.csv"
 
 
+@pytest.mark.slow
 def test_warm_up_and_temperature_ramp_give_the_clean_answer(warm_and_ramp):
     clean_path, env_path = warm_and_ramp
     plain = Preparation(warmup="auto", temperature="auto")
@@ -211,6 +215,7 @@ def test_warm_up_and_temperature_ramp_give_the_clean_answer(warm_and_ramp):
     assert gx.results["oadev_raw"].dev[-1] > 3 * gx.results["oadev"].dev[-1]
 
 
+@pytest.mark.slow
 def test_warm_up_kept_and_temperature_off_analyse_the_record_as_recorded(warm_and_ramp):
     _, env_path = warm_and_ramp
     a = analyze_log(io.read(env_path), statistics="oadev", prep=Preparation(warmup="keep", temperature="off"))
@@ -303,6 +308,7 @@ def test_a_transient_found_but_not_cut_is_a_note_not_a_warning():
     assert p.notes[1].startswith("warm-up: nothing to leave out on gyro_x, gyro_y")
 
 
+@pytest.mark.slow
 def test_gaps_warm_up_and_ramp_through_analyze_with_no_flags(tmp_path, capsys):
     # The "done when": one log with dropped samples (scattered and a burst), a warm-up and
     # a temperature ramp, through `sigmatau analyze` with no flags, against the same log clean.

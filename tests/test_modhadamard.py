@@ -215,6 +215,7 @@ def test_mhtot_fast_short_records(rng):
             assert fast == pytest.approx(direct, rel=1e-10), (m, extra)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0, -2, -4])
 def test_mhtot_sums_against_exact_rationals(rng, alpha):
     """Both kernels against the definition in exact rational arithmetic, on the hardest input

@@ -202,6 +202,7 @@ def test_binomial_bounds_of_the_published_table():
     assert stats.binom.sf(most, MC_RUNS, 1 - p_lo) <= MC_ALPHA < stats.binom.sf(most - 1, MC_RUNS, 1 - p_lo)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha, dtype, dmax, published_m1, published_m8", MC_CASES)
 def test_lag1_identification_rate_binomial(mc_lag1, alpha, dtype, dmax, published_m1, published_m8):
     runs, hadamard_rrfm = mc_lag1[alpha]
@@ -238,6 +239,7 @@ def test_b1_expected_validates():
         b1_expected(1, 0)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha, mu, published_mc", [(2, -2, 0.709), (0, -1, 0.998), (-1, 0, 2.05), (-2, 1, 8.04)])
 def test_b1_monte_carlo_means(alpha, mu, published_mc):
     # numerics.md §5.3: Nb = 16, frequency samples that are true τ0-averages.
@@ -503,6 +505,7 @@ def test_stable32_htot_on_frequency_reads_the_data_as_phase():
 _ALPHA_EXCEPTIONS = {"phasedat/phase_dat_totdev_octave.txt": 7}
 
 
+@pytest.mark.slow
 def test_stable32_alpha_column_on_every_row():
     data_cache = {}
     total = agree = 0

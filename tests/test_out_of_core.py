@@ -107,6 +107,7 @@ def _left_over(folder: Path) -> list[Path]:
 # ------------------------------------------------------------------- equality, format by format
 
 
+@pytest.mark.slow
 def test_npz_whole_analysis_equals_in_memory(tmp_path):
     f = tmp_path / "imu.npz"
     np.savez(f, rate=np.array(RATE), **_imu(60.0))
@@ -116,6 +117,7 @@ def test_npz_whole_analysis_equals_in_memory(tmp_path):
     assert any("data checks of the samples" in n for n in outside.notes)
 
 
+@pytest.mark.slow
 def test_npy_two_dimensional_and_structured(tmp_path):
     chans = _imu(30.0, seed=3)
     f = tmp_path / "block.npy"
@@ -132,6 +134,7 @@ def test_npy_two_dimensional_and_structured(tmp_path):
     _same_analysis(*_pair(h, rate=RATE))
 
 
+@pytest.mark.slow
 def test_hdf5_group(tmp_path):
     h5py = pytest.importorskip("h5py")
     f = tmp_path / "imu.h5"
@@ -151,6 +154,7 @@ def _write_csv(path: Path, t: np.ndarray, cols: dict[str, np.ndarray]) -> None:
             fh.write(f"{ti}," + ",".join(repr(v) for v in row) + "\n")
 
 
+@pytest.mark.slow
 def test_csv_with_timestamps_duplicates_and_gaps(tmp_path):
     chans = _imu(40.0, seed=7, axes="xy")
     n = chans["gyro_x"].size
@@ -176,6 +180,7 @@ def test_csv_with_timestamps_duplicates_and_gaps(tmp_path):
     assert _left_over(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_csv_with_nan_cells_and_jittery_float_times(tmp_path):
     chans = _imu(30.0, seed=9, axes="xy")
     n = chans["gyro_x"].size
@@ -214,6 +219,7 @@ def test_decision_follows_the_limit_not_the_machine(tmp_path):
     assert memory_plan(f, memory="chunked").mode == "chunked"
 
 
+@pytest.mark.slow
 def test_cli_out_of_core_writes_every_output_and_says_so(tmp_path, capsys):
     f = tmp_path / "imu.npz"
     np.savez(f, rate=np.array(RATE), **_imu(40.0, axes="xy"))
@@ -242,6 +248,7 @@ def test_cli_out_of_core_writes_every_output_and_says_so(tmp_path, capsys):
     assert not any(p.name.startswith(".") for p in tmp_path.iterdir())  # no staging or temporary directory left
 
 
+@pytest.mark.slow
 def test_cli_in_memory_path_is_unchanged(tmp_path, capsys):
     f = tmp_path / "imu.npz"
     np.savez(f, rate=np.array(RATE), **_imu(30.0))
@@ -321,6 +328,7 @@ def test_temporary_files_removed_after_success_and_error(tmp_path):
     assert _left_over(tmp_path) == []
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(sys.platform == "win32", reason="SIGTERM")
 def test_temporary_files_removed_after_sigterm(tmp_path):
     n = 400_000

@@ -133,6 +133,7 @@ def test_imu_yaml_round_trips_hostile_names(imu_analysis, name, tmp_path, monkey
         assert "\x1b" not in line and "\u202e" not in line
 
 
+@pytest.mark.slow
 def test_imu_yaml_from_the_command_line_with_a_hostile_file_name(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     rng = np.random.default_rng(12)
@@ -157,6 +158,7 @@ def test_rostopic_with_control_characters_is_refused(topic, tmp_path, capsys):
     assert "\x1b" not in err and not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.filterwarnings("default::sigmatau.errors.SigmaTauWarning")  # the CLI prints it
 def test_without_pyyaml_imu_yaml_is_skipped_with_one_warning(tmp_path, capsys, monkeypatch):
     for name in [m for m in sys.modules if m == "yaml" or m.startswith("yaml.")]:
@@ -460,6 +462,7 @@ def _script_elements(page: str) -> list[tuple[dict, str]]:
     return found
 
 
+@pytest.mark.slow
 def test_report_charts_keep_hostile_channel_names_as_data(tmp_path, capsys):
     pytest.importorskip("matplotlib")
     pytest.importorskip("vl_convert")  # the interactive extra

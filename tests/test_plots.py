@@ -67,6 +67,7 @@ def _gids(fig):
 # ------------------------------------------------------------------ σ–τ figure
 
 
+@pytest.mark.slow
 def test_sigma_tau_figure_artists(gyro, group_figure):
     chans, _ = gyro
     fig = group_figure
@@ -142,6 +143,7 @@ def test_statistics_selection_and_tuples(gyro):
         plots.sigma_tau_figure([ch], statistics="oadev")
 
 
+@pytest.mark.slow
 def test_save_all_formats(group_figure, tmp_path):
     fig = group_figure
     paths = plots.save_figure(fig, tmp_path / "sub" / "sigma_tau", formats=("png", "svg", "pdf"))
@@ -156,6 +158,7 @@ def test_save_all_formats(group_figure, tmp_path):
         plots.save_figure(fig, tmp_path / "x", formats=("jpg",))
 
 
+@pytest.mark.slow
 def test_saves_are_deterministic(gyro, tmp_path):
     """Two saves of one figure, and a rebuilt figure, give identical bytes (no dates, fixed SVG ids)."""
     chans, _ = gyro
@@ -348,6 +351,7 @@ def _bbox_inside(inner, outer, tol=1.0):
             and inner.y1 <= outer.y1 + tol)
 
 
+@pytest.mark.slow
 def test_single_layout_pass_is_settled_and_nothing_is_cut_or_overlapping(group_figure):
     """The layout done once is the constrained layout's fixed point; legends and labels fit and do not collide."""
     from matplotlib.layout_engine import ConstrainedLayoutEngine

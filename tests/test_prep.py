@@ -167,6 +167,7 @@ CASES = [  # model, data type, noise simulated, noise= given (None: the model's 
 ]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model,data_type,kind,noise_arg", CASES)
 def test_drift_is_recovered_within_its_standard_error(rng, model, data_type, kind, noise_arg):
     assert noise_arg is not None or NOMINAL_NOISE[model] == kind
@@ -195,6 +196,7 @@ def _nonlinear_truth(model: str, t: np.ndarray) -> tuple[np.ndarray, float]:
     return a + b * np.sqrt(t + c), b / (2 * np.sqrt(span + c))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("model", ["log", "diffusion"])
 def test_nonlinear_models_recover_the_slope_within_their_standard_error(rng, model):
     t = np.arange(400) * 10.0

@@ -69,6 +69,7 @@ def test_temperature_profile_and_simulate_option_checks():
 
 # -- temperature_fit against known truth -----------------------------------------------------------------
 
+@pytest.mark.slow
 def test_tempco_of_a_ramp_is_recovered_within_its_stated_uncertainty():
     """White noise and a 20 → 40 °C ramp: ±2 SE covers the true tempco at the normal rate
     (measured with these seeds 117/120; 112/120 before the coloured-noise model) and BIC picks
@@ -225,6 +226,7 @@ def test_the_noise_model_behind_the_errors_is_recorded(rng):
     assert short.details["noise_model"].startswith("white (") and short.details["noise_probability"]["flicker"] == 0
 
 
+@pytest.mark.slow
 def test_white_data_give_nearly_the_weighted_least_squares_answer():
     """White noise on a cycle: the result changes little from the former weighted least squares on
     the block means (computed here): the tempco within 0.1 of its standard error of the WLS value,

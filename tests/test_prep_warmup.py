@@ -28,6 +28,7 @@ def binomial_bounds(trials: int, p: float, alpha: float = 1e-3) -> tuple[int, in
     return int(sps.binom.ppf(alpha / 2, trials, p)), int(sps.binom.isf(alpha / 2, trials, p))
 
 
+@pytest.mark.slow
 def test_time_constant_and_amplitude_are_recovered_within_their_stated_uncertainty():
     """White gyro noise plus A·exp(−t/T) (A = 0.4 σ per sample): ±2 SE covers the truth at the
     normal rate. Measured with these seeds: 80/80 detected, coverage 78/80 (A) and 78/80 (T)."""

@@ -110,6 +110,7 @@ def test_available_memory_reads_meminfo():
     assert avail is None or avail > 2**20
 
 
+@pytest.mark.slow
 def test_sigmatau_analyze_draws_the_bar_on_a_real_pseudo_terminal(tmp_path):
     # A fresh pty reports a size of 0 × 0, as under `script` and some CI runners: tqdm left to
     # itself draws nothing there. stderr on the pty, stdout on a pipe, as a user's `> out.txt`.

@@ -98,6 +98,7 @@ def test_readme_demo(tmp_path):
     assert "gyro" in r.stdout
 
 
+@pytest.mark.slow
 def test_readme_tour(tmp_path):
     for cmd in TOUR:
         r = _ok(cmd, tmp_path)
@@ -108,6 +109,7 @@ def test_readme_tour(tmp_path):
     assert "gyro_y" not in r.stdout
 
 
+@pytest.mark.slow
 def test_readme_export(tmp_path):
     _ok("sigmatau simulate imu.csv --preset lsm6dsl --duration 300", tmp_path)
     _ok(EXPORT, tmp_path)
@@ -147,6 +149,7 @@ def test_readme_batch_existing_scheduler(tmp_path):
     assert len(list((tmp_path / "fleet" / "logs").iterdir())) == 3
 
 
+@pytest.mark.slow
 def test_readme_compare_and_psd(tmp_path):
     for cmd in COMPARE_TOUR:
         r = _ok(cmd, tmp_path)
@@ -168,6 +171,7 @@ def test_readme_stable32_output(tmp_path):
     assert len(values) == 10_000
 
 
+@pytest.mark.slow
 def test_readme_watch(tmp_path):
     """The README's watch example: a finished log, followed until 2 s without growth, the live page
     served on 127.0.0.1, then the same outputs as ``sigmatau analyze``."""
@@ -187,12 +191,14 @@ def test_readme_watch(tmp_path):
             assert r["alpha"] == b["statistics"][stat]["alpha"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["demo", "analyze", "stats", "compare", "psd", "simulate", "batch", "watch"])
 def test_readme_help(tmp_path, command):
     r = _ok(HELP.replace("COMMAND", command), tmp_path, timeout=120)
     assert "examples:" in r.stdout and "exit codes" in r.stdout
 
 
+@pytest.mark.slow
 def test_readme_chunked_stats(tmp_path):
     rng = np.random.default_rng(20261124)
     np.save(tmp_path / "month.npy", rng.standard_normal(200_000))
@@ -201,6 +207,7 @@ def test_readme_chunked_stats(tmp_path):
     assert "oadev" in low and "mdev" in low and "totdev" in low
 
 
+@pytest.mark.slow
 def test_readme_out_of_core(tmp_path):
     rng = np.random.default_rng(20261207)
     np.savez(tmp_path / "day.npz", gyro_x=rng.standard_normal(50_000) * 1e-3,

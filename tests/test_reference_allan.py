@@ -222,6 +222,7 @@ def _run_table(name: str, path: str, statistic: str):
     return table, compute(statistic, data, rate=rate, data_type=data_type, m=table.af)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "path", "statistic"), _params(exact_tables_only=False))
 def test_stable32_terms(name, path, statistic):
     table, result = _run_table(name, path, statistic)

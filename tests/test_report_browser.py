@@ -84,6 +84,7 @@ def _requests(driver) -> list[str]:
     return urls
 
 
+@pytest.mark.slow
 def test_report_renders_in_headless_chromium(demo, driver):
     _, page = demo
     _open(driver, page)
@@ -145,6 +146,7 @@ def _numbers(text: str) -> list[float]:
     return [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?(?:e[-+]?\d+)?", text)]
 
 
+@pytest.mark.slow
 def test_interactive_charts_draw_hide_tell_and_zoom_offline(demo, driver):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.actions.wheel_input import ScrollOrigin
@@ -222,6 +224,7 @@ HOSTILE_CHANNELS = ["</script><script>window.__pwned = 1</script>", '"><img src=
                     "it's \"quoted\" & <b>bold</b> \u2028 ü"]
 
 
+@pytest.mark.slow
 def test_hostile_channel_names_are_text_in_the_interactive_chart(tmp_path, driver):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.support.ui import WebDriverWait
@@ -320,6 +323,7 @@ def without_extra(monkeypatch):
     interactive._bundle.cache_clear()
 
 
+@pytest.mark.slow
 def test_without_the_extra_the_report_is_static_with_one_line(imu_analysis, tmp_path, without_extra):
     from sigmatau.outputs import write_outputs
     from sigmatau.report.interactive import MISSING_NOTE

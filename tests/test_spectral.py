@@ -141,6 +141,7 @@ def test_transfer_function_is_weights_dft(kind):
     np.testing.assert_allclose(transfer_function(kind, f, n / rate, rate=rate), want, rtol=1e-9)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("kind", KINDS_ALL)
 def test_long_tau_method_matches_node_by_node(kind, monkeypatch):
     # Beyond _DIRECT_MAX half periods the middle of the band is integrated by its mean and end

@@ -126,6 +126,7 @@ def _chunk_sizes(rng: np.random.Generator, n: int) -> list[int]:
 # ------------------------------------------------------------------ equality with the batch
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("data_type", ["freq", "phase"])
 @pytest.mark.parametrize("noise", list(ALPHAS))
 def test_equals_batch_on_power_law_noise(noise, data_type, rng):
@@ -233,6 +234,7 @@ def test_imu_model_is_analyze_of_the_streamed_curve(rng):
 # ------------------------------------------------------------------ memory
 
 
+@pytest.mark.slow
 def test_state_does_not_grow_with_the_record(rng):
     stream = Stream(1000.0, max_m=2**10)
     chunk = rng.standard_normal(10_000)

@@ -116,6 +116,7 @@ def name(request):
     return request.param
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("n_phase", [1001, 1003, 1004])
 def test_default_limit(name, n_phase):
     stop, _ = LIMITS[name]
@@ -134,6 +135,7 @@ def test_default_limit(name, n_phase):
     assert everything.n_points == n_phase
 
 
+@pytest.mark.slow
 def test_default_limit_frequency_data(name):
     # N counts phase points: M frequency samples give N = M + 1.
     stop, _ = LIMITS[name]

@@ -146,6 +146,7 @@ def test_fast_sum_matches_oracle(oracle_cases):
             assert rel <= max(err, 1e-13), f"{kind} N={n} m={m}: {rel:.2e} > estimate {err:.2e}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("uncached_fft", [1, 1 << 30])
 def test_fast_sum_in_small_pieces_matches_oracle(oracle_cases, monkeypatch, uncached_fft):
     # The memory-bounding pieces of the lag-sum form, forced at small N: lag sums
@@ -597,6 +598,7 @@ def test_theoh_fast_is_exact_up_to_the_block_threshold():
     assert fast.bias == exact.bias
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("alpha", [0, -1, -2])
 def test_theoh_fast_agrees_with_the_definition_for_fm_noise(alpha):
     # docs/theoh-fast.md: at N = 2**20 the TheoBR rows differ by ≤ 4.6e-4 (WFM), 5.9e-5 (FFM),

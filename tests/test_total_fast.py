@@ -93,6 +93,7 @@ MID = 5_002
 MID_FACTORS = [3, 64, 700, 1_667]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(NOISES))
 def test_fast_equals_plain_long_records(name):
     y, x = _series(name, LONG, seed=sum(map(ord, name)))
@@ -102,6 +103,7 @@ def test_fast_equals_plain_long_records(name):
                 _assert_close(u, m)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(NOISES))
 def test_fast_equals_plain_mid_factors(name):
     y, x = _series(name, MID, seed=7 + sum(map(ord, name)))

@@ -159,6 +159,7 @@ def assert_same_statistics(a: dict, b: dict, rtol: float = 1e-12) -> float:
 # ------------------------------------------------------------------------------------- following
 
 
+@pytest.mark.slow
 def test_followed_file_equals_analyze_of_the_finished_file(gyro, tmp_path):
     """Chunks cut mid-line: no line is parsed before its newline; the record is the file, byte for byte."""
     p, err, live = _watch_then_write(tmp_path, gyro, "plain", 2.0, "--until-idle", 1.5, "--out", "out",
@@ -172,6 +173,7 @@ def test_followed_file_equals_analyze_of_the_finished_file(gyro, tmp_path):
     assert live.read_bytes() == gyro.read_bytes()  # only read
 
 
+@pytest.mark.slow
 def test_a_last_line_without_newline(gyro, tmp_path, capsys):
     """At the end of input an unfinished last line is parsed (as analyze does); when the run is
     stopped (--duration) it is left out, saying so."""
@@ -188,6 +190,7 @@ def test_a_last_line_without_newline(gyro, tmp_path, capsys):
     assert _results(tmp_path / "b")["log"]["n_samples"] == 3999
 
 
+@pytest.mark.slow
 def test_truncated_file_is_read_again_from_its_start(gyro, tmp_path):
     p, err, _ = _watch_then_write(tmp_path, gyro, "truncate", 2.0, "--until-idle", 1.5, "--out", "out",
                                   "--no-figures", "--no-report")
@@ -200,6 +203,7 @@ def test_truncated_file_is_read_again_from_its_start(gyro, tmp_path):
     assert n == 4000 or "gap of" in text
 
 
+@pytest.mark.slow
 def test_rotated_file_is_followed_without_losing_a_line(gyro, tmp_path):
     p, err, _ = _watch_then_write(tmp_path, gyro, "rotate", 2.0, "--until-idle", 1.5, "--out", "out",
                                   "--no-figures", "--no-report")
@@ -212,6 +216,7 @@ def test_rotated_file_is_followed_without_losing_a_line(gyro, tmp_path):
     assert_same_statistics(a, b)
 
 
+@pytest.mark.slow
 def test_a_stalled_writer_is_waited_for(gyro, tmp_path):
     p, err, live = _watch_then_write(tmp_path, gyro, "stall1.5", 2.0, "--until-idle", 2.5, "--out", "out",
                                      "--no-figures", "--no-report")
@@ -220,6 +225,7 @@ def test_a_stalled_writer_is_waited_for(gyro, tmp_path):
                            _analyze(live, tmp_path / "ref", "--no-figures", "--no-report"))
 
 
+@pytest.mark.slow
 def test_standard_input_through_a_pipe(gyro, tmp_path):
     cat = subprocess.Popen(["cat", str(gyro)], stdout=subprocess.PIPE)
     p, _, err = _watch(tmp_path, "-", "--out", "out", "--no-figures", "--no-report", stdin=cat.stdout)
@@ -246,6 +252,7 @@ def test_a_refused_stream_keeps_what_it_received(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="needs FIFOs")
 def test_a_fifo_is_read_once(gyro, tmp_path):
     fifo = tmp_path / "imu.fifo"
@@ -257,6 +264,7 @@ def test_a_fifo_is_read_once(gyro, tmp_path):
     assert_same_statistics(_results(tmp_path / "out"), _analyze(gyro, tmp_path / "ref", "--no-figures", "--no-report"))
 
 
+@pytest.mark.slow
 def test_sigint_mid_run_writes_complete_outputs(gyro, tmp_path):
     live = tmp_path / "live.csv"
     writer = _start_writer(gyro, live, "plain", 5.0)
@@ -294,6 +302,7 @@ def test_bad_serial_port_is_one_line(capsys, tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")
 def test_serial_port_through_a_pty(gyro, tmp_path):
     pytest.importorskip("serial")
@@ -333,6 +342,7 @@ def _timed(path: Path, t: np.ndarray) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_policies_are_those_of_analyze(tmp_path, capsys):
     t = np.arange(3000) / 100.0
     back = _timed(tmp_path / "back.csv", np.concatenate([t[:2000], t[1990:1991], t[2000:]]))
@@ -411,6 +421,7 @@ def _url(err: Path, timeout: float = 30) -> str:
     raise AssertionError(err.read_text(errors="replace"))
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(os, "openpty"), reason="needs a pseudo-terminal")
 def test_hostile_column_names_are_escaped_everywhere(tmp_path):
     """Names with terminal escapes, markup, a formula and a bidi override: escaped on the terminal
