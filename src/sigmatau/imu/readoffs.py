@@ -222,8 +222,9 @@ def _upper_bound(term: str, curve: _Curve, conf: float, su: SensorUnit) -> tuple
         bound, where = float(mapped[j]), float(taus[ok][j])
     rule = (f"no region of slope {s0:+g} spanning {_MIN_SPAN[term] / math.log(2):g} octave(s) in"
             f" τ = {taus[0]:.3g}–{taus[-1]:.3g} s; upper bound: the lowest one-sided upper limit of σ(τ)"
-            f" over the {k} τ, each at {100 * p_pt:.3g} % (so the bound holds at"
-            f" {50 * (1 + conf):.3g} %), carried along slope {s0:+g} to τ = {tr:.4g} s"
+            f" over the {k} τ, each at {100 * p_pt:.3g} % (so the bound holds in at least"
+            f" {50 * (1 + conf):.3g} % of records: it bounds the whole curve, of which the term is a share),"
+            f" carried along slope {s0:+g} to τ = {tr:.4g} s"
             + (" and divided by 0.6643" if term == "B" else "") + f" (attained at τ = {where:.3g} s)")
     param = Parameter(term, math.nan, 0.0, bound, su.term_unit(term), False, "read-off", conf, su.kind,
                       note=rule)
