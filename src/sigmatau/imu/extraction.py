@@ -185,7 +185,7 @@ def analyze(
     The flat region of B holds N²/τ and K²τ/3 as well: without the subtraction
     its read-off came out 1.1–1.3× the truth. *Bound rule* when no region exists: the lowest one-sided upper
     limit of σ(τ) over the k τ of the curve, each at level ``1 − (1 − p)/(2k)``
-    (so that the bound holds at *at least* ``(1 + p)/2`` however the lowest
+    (so that the bound holds in at least ``(1 + p)/2`` of records however the lowest
     point was picked), carried along the term's slope to its read-off τ: in
     practice the longest τ for K and R, the shortest for Q and N, the lowest
     point for B (σ_min/0.6643). It is conservative by construction: it bounds
