@@ -26,12 +26,12 @@ import shutil
 import threading
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping, Optional
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
 from ..errors import DataError, ParameterError
-from ._disklayout import Layout, as_dtype, hdf5_layout, npy_layout, npz_layout
+from ._disklayout import Layout, Reader, as_dtype, hdf5_layout, npy_layout, npz_layout
 from ._disktext import convert, text_size
 from ._disktiming import CHUNK_ROWS, RowMap, process_streamed, scan_times
 from ._errors import InputWarning, TimingWarning, option_hint, repr_kw
@@ -44,7 +44,6 @@ from ._timing import infer_time_unit
 
 __all__ = ["DiskChannel", "DiskLog", "LogSize", "open_log", "log_size", "OUT_OF_CORE_FORMATS"]
 
-Reader = Callable[[int, int], np.ndarray]
 
 #: Formats :func:`open_log` reads without loading them.
 OUT_OF_CORE_FORMATS = ("npy", "npz", "hdf5", "csv", "stable32")

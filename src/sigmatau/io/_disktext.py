@@ -17,12 +17,13 @@ import lzma
 import os
 import zlib
 from pathlib import Path
-from typing import Any, Callable, Iterator, Optional
+from typing import Any, Iterator, Optional
 
 import numpy as np
 
 from ..errors import DataError, ParameterError
 from . import _arrowcsv
+from ._disklayout import Reader, _bytes_reader
 from ._errors import FormatError
 from ._progress import Progress
 from ._registry import Options, Table
@@ -32,7 +33,6 @@ from ._text import (CHUNK_ROWS, _check_no_extra_fields, _choose_columns, _fast_e
 
 __all__ = ["text_size", "convert"]
 
-Reader = Callable[[int, int], np.ndarray]
 
 #: Bytes of each temporary file's ``.npy`` header (rewritten with the final length at the end).
 _HEADER = 128
@@ -121,23 +121,12 @@ class _ColumnFiles:
             f.seek(0)
             f.write(header)
             f.close()
-            readers.append(_reader(path, dt))
+            readers.append(_bytes_reader(Path(path), _HEADER, dt, (self.n,), False))
         return readers
 
     def close(self) -> None:
         for f in self.files:
             f.close()
-
-
-def _reader(path: str, dtype: np.dtype) -> Reader:
-    item = dtype.itemsize
-
-    def read(a: int, b: int) -> np.ndarray:
-        with open(path, "rb") as f:
-            f.seek(_HEADER + a * item)
-            return np.fromfile(f, dtype=dtype, count=b - a)
-
-    return read
 
 
 def _split(arr: np.ndarray, int_time: bool, timed: bool, k: int) -> tuple[Optional[np.ndarray], list[np.ndarray]]:

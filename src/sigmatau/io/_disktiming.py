@@ -22,18 +22,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Callable, Mapping
+from typing import Mapping
 
 import numpy as np
 
 from ..errors import DataError
+from ._disklayout import Reader
 from ._errors import option_hint, repr_kw
 from ._timing import AUTO_HOLD_SAMPLES, AUTO_MARK_SHARE, _RATE_TOLERANCE, _fmt, _gap_text, to_seconds
 from ._timing_report import Gap, TimingReport
 
 __all__ = ["RowMap", "process_streamed", "scan_times", "CHUNK_ROWS"]
 
-Reader = Callable[[int, int], np.ndarray]
 
 #: Timestamps per read of a pass (8 MiB of int64 or float64).
 CHUNK_ROWS = 1 << 20
