@@ -54,7 +54,11 @@ class NoiseModel:
     regions : mapping of str to Region
         Region chosen for each read-off.
     fit_terms : tuple of str
-        Terms kept by the fit's term selection.
+        Terms kept by the fit's term selection: the selected model, drawn over
+        the curve (:attr:`coefficients`, :meth:`variance`). The fit's
+        parameters are not its coefficients: their values and intervals are
+        those of the unconstrained fit given the selection (see
+        :func:`~sigmatau.imu.analyze`, *Intervals*).
     fit_chi2, fit_dof : float, int
         Weighted residual sum of squares and degrees of freedom of the fit.
     discrepancy : float
@@ -124,7 +128,9 @@ class NoiseModel:
     # -- the fitted curve -------------------------------------------------------
     @property
     def coefficients(self) -> dict[str, float]:
-        """Fitted AVAR coefficients ``Q², N², B², K², R²`` by term (input units squared).
+        """Fitted AVAR coefficients ``Q², N², B², K², R²`` of the selected model by term (input units
+        squared): the model drawn over the curve, not the parameters' values (which are adjusted for
+        the term selection; a term dropped beside a kept one adds its share to it here).
 
         0 for a dropped term; the ``Q`` entry is negative when it holds the
         sensor's low-pass filter (see ``filter_time``).

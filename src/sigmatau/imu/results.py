@@ -28,7 +28,9 @@ class Parameter:
     name : {"Q", "N", "B", "K", "R"} or str
         Term (or a derived quantity such as ``"angle error"``).
     value : float
-        Estimate; NaN when not resolved.
+        Estimate; NaN when not resolved. For a term the fit kept, the
+        median-unbiased estimate given the term selection (see
+        :func:`sigmatau.imu.analyze`, *Intervals*).
     low, high : float
         Interval at ``confidence``. When not resolved, ``low = 0`` and ``high``
         is an upper bound (``inf`` when not even a bound can be given).
