@@ -208,17 +208,18 @@ def test_dropped_k_bound_holds_given_the_drop_fast(rng):
 
 
 @pytest.mark.slow
-def test_kept_k_interval_covers_given_the_keep_fast(rng):
+def test_kept_k_interval_covers_given_the_keep(rng):
     """The interval printed for a K that the term selection kept covers at its nominal rate (68.3 %)
     among the runs that keep it, and its value is not biased up by the selection: N+B+K+R, K at the
     detection limit (kept in about half the runs), on 300 curves drawn from the points' own model
     (``_copula_curves``). The count is binomial; accepted within 3.29 sd (two-sided 0.1 %) of
     68.3 %, and the median of value/truth within 0.9–1.1.
 
-    Before the selection-aware intervals (ĉ ± zσ_c of the unconstrained fit, widened to hold the
-    selected model's value) the interval covered in about 85 % of the kept runs and the value (the
-    selected model's) was 1.28× the truth at the median, on the grid's simulated records (99 kept
-    of 200): K is kept exactly when it came out high."""
+    Measured on these draws: 120 of 173 kept runs covered (69.4 %), value/truth 1.025 at the
+    median. Before the selection-aware intervals (ĉ ± zσ_c of the unconstrained fit, widened to
+    hold the selected model's value): 137 of 173 (79.2 %), and the value (the selected model's)
+    1.277× the truth at the median, which fails the test: K is kept exactly when it came out
+    high."""
     truth = GRID["N+B+K+R"]
     held, ratio = [], []
     for curve in _copula_curves(truth, rng, 300):
