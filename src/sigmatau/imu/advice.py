@@ -543,7 +543,7 @@ def _unresolved_anchor(plan: _Plan, term: str, value: float, z_p: float) -> Opti
     s_model = plan.rel_sd(plan.n_now, coef)[j]
     if not math.isfinite(s_model):
         return None
-    # No measurement to anchor on: the model's own σ_c/c is the precision it would have.
+    # No measurement to anchor on: the model's own σ_c/c, in the interval analyze would print.
     return _Anchor(plan, j, coef, z_p, s_model, _h_printed(j, z_p, s_model), s_model, False)
 
 
