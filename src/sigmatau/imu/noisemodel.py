@@ -56,9 +56,9 @@ class NoiseModel:
     fit_terms : tuple of str
         Terms kept by the fit's term selection: the selected model, drawn over
         the curve (:attr:`coefficients`, :meth:`variance`). The fit's
-        parameters are not its coefficients: their values and intervals are
-        those of the unconstrained fit given the selection (see
-        :func:`~sigmatau.imu.analyze`, *Intervals*).
+        parameters are not always its coefficients: the value and interval of
+        a term the selection could have dropped are those of the unconstrained
+        fit given the selection (see :func:`~sigmatau.imu.analyze`, *Intervals*).
     fit_chi2, fit_dof : float, int
         Weighted residual sum of squares and degrees of freedom of the fit.
     discrepancy : float

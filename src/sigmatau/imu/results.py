@@ -28,9 +28,11 @@ class Parameter:
     name : {"Q", "N", "B", "K", "R"} or str
         Term (or a derived quantity such as ``"angle error"``).
     value : float
-        Estimate; NaN when not resolved. For a term the fit kept, the
-        median-unbiased estimate given the term selection (see
-        :func:`sigmatau.imu.analyze`, *Intervals*).
+        Estimate; NaN when not resolved. For a term the fit kept that its
+        selection could have dropped, the median-unbiased estimate given the
+        selection; for one it keeps whatever its estimate (N, nearly always),
+        the selected model's value (see :func:`sigmatau.imu.analyze`,
+        *Intervals*).
     low, high : float
         Interval at ``confidence``. When not resolved, ``low = 0`` and ``high``
         is an upper bound (``inf`` when not even a bound can be given).
