@@ -7,12 +7,11 @@ model-discrepancy floor when the χ² says the curve departs from the model
 (``_discrepancy``), backward term selection (``_select_terms``), the
 unconstrained fit of every term behind the intervals (``_fit_free``,
 ``_fit_parameters``), the selection-aware intervals of the kept terms
-(``_selection_aware_intervals``: where the selection would drop the term,
-``_keep_edge``; the truncated normal's Neyman limits, ``_truncated_below_limits``)
-and the selection-aware upper bounds of the dropped terms
-(``_selection_aware_bounds``: where the selection would keep the term,
-``_drop_edge``; both edges by ``_selection_edge``; the spread at a candidate value,
-``_spread_at``; the truncated normal's Neyman limit, ``_truncated_upper``).
+(``_selection_aware_intervals``: the truncated normal's Neyman limits,
+``_truncated_below_limits``) and the selection-aware upper bounds of the dropped
+terms (``_selection_aware_bounds``: ``_truncated_upper``, its mirror image), both
+from where the selection's decision flips (``_selection_edge``), the spread at a
+candidate value (``_spread_at``) and one root finder (``_truncated_solve``).
 ``_dropped_bounds`` (a refit with the term forced in) serves the Gauss–Markov
 term's bound.
 """
@@ -467,29 +466,13 @@ def _kept_terms(design: _Cols, var: np.ndarray, nu: np.ndarray, taus: np.ndarray
     return {c for c, hc in zip(left, h) if hc > 0}
 
 
-#: Distances (in standard errors σ_c) above the observed ĉ at which the selection is rerun to find
-#: where it would keep a dropped term, then bisections between the last two; a term still dropped
-#: at the last distance is taken to be dropped whatever ĉ (a truncation 6 σ_c above ĉ leaves the
-#: bound, about 1 σ_c above ĉ, all but unchanged: Φ(5) = 1 − 3·10⁻⁷).
+#: Distances (in standard errors σ_c) from the observed ĉ, above it for a dropped term and below it
+#: for a kept one, at which the selection is rerun to find where its decision flips, then
+#: bisections between the last two; a decision that has not flipped at the last distance is taken
+#: to hold whatever ĉ (a truncation 6 σ_c away leaves a limit about 1 σ_c from ĉ all but unchanged:
+#: Φ(5) = 1 − 3·10⁻⁷).
 _EDGE_STEPS = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0)
 _EDGE_BISECTIONS = 5
-
-
-def _drop_edge(fit: _Fit, design: _Cols, cols: list[int], var: np.ndarray, nu: np.ndarray,
-               taus: np.ndarray, j: int, min_significance: float) -> float:
-    """The value ``t*`` of the unconstrained estimate ``ĉ_j`` below which the selection drops column
-    ``j``, the part of the data independent of ``ĉ_j`` held fixed (``inf`` when it drops it within
-    ``_EDGE_STEPS[-1]`` standard errors above the observed ``ĉ_j``): :func:`_selection_edge` of a
-    dropped term."""
-    return _selection_edge(fit, design, cols, var, nu, taus, j, min_significance, kept_now=False)
-
-
-def _keep_edge(fit: _Fit, design: _Cols, cols: list[int], var: np.ndarray, nu: np.ndarray,
-               taus: np.ndarray, j: int, min_significance: float) -> float:
-    """The value ``t*`` of ``ĉ_j`` above which the selection keeps column ``j`` (``-inf`` when it still
-    keeps it ``_EDGE_STEPS[-1]`` standard errors below the observed ``ĉ_j``): :func:`_selection_edge`
-    of a kept term."""
-    return _selection_edge(fit, design, cols, var, nu, taus, j, min_significance, kept_now=True)
 
 
 def _selection_edge(fit: _Fit, design: _Cols, cols: list[int], var: np.ndarray, nu: np.ndarray,
@@ -551,62 +534,49 @@ def _spread_at(fit: _Fit, design: _Cols, j: int):
     return spread
 
 
-def _truncated_upper(c_obs: float, spread, edge: float, level: float) -> float:
-    """The upper limit ``U`` with ``P_U(ĉ' ≤ ĉ | ĉ' < edge) = 1 − level`` for ``ĉ' ~ N(U, s(U)²)``:
-    ``Φ((ĉ − U)/s(U)) = (1 − level)·Φ((edge − U)/s(U))`` (``inf`` when no finite U satisfies it)."""
+def _truncated_solve(c_obs: float, spread, edge: float, prob: float) -> float:
+    """The ``c`` with ``S(c) = prob`` for ``ĉ' ~ N(c, s(c)²)`` truncated below at ``edge`` (``-inf``: no
+    truncation), where ``S(c) = P_c(ĉ' ≥ ĉ | ĉ' > edge) = Φ((c − ĉ)/s(c)) / Φ((c − edge)/s(c))``
+    increases with ``c``; ``±inf`` when no finite ``c`` within 10⁴ spreads of ``ĉ`` does."""
     from scipy.optimize import brentq  # imported here: keeps `import sigmatau` light
     from scipy.special import log_ndtr
 
-    log_alpha = math.log(1.0 - level)
     s0 = spread(c_obs)
+    target = math.log(prob)
 
-    def excess(x: float) -> float:   # x = (U − ĉ)/s(ĉ); decreasing from ln ½ − ln α > 0
+    def excess(x: float) -> float:  # x = (c − ĉ)/s(ĉ)
         c = c_obs + x * s0
         s = spread(c)
-        trunc = float(log_ndtr((edge - c) / s)) if math.isfinite(edge) else 0.0
-        return float(log_ndtr((c_obs - c) / s)) - trunc - log_alpha
+        trunc = float(log_ndtr((c - edge) / s)) if math.isfinite(edge) else 0.0
+        return float(log_ndtr((c - c_obs) / s)) - trunc - target
 
-    lo, hi = 0.0, 1.0
-    while excess(hi) > 0:
+    lo, hi = -1.0, 1.0
+    while excess(hi) < 0:
         lo, hi = hi, 2.0 * hi
         if hi > 1e4:
             return math.inf
+    while excess(lo) > 0:
+        lo, hi = 2.0 * lo, lo
+        if lo < -1e4:
+            return -math.inf
     return c_obs + s0 * brentq(excess, lo, hi, xtol=1e-6)
+
+
+def _truncated_upper(c_obs: float, spread, edge: float, level: float) -> float:
+    """The upper limit ``U`` with ``P_U(ĉ' ≤ ĉ | ĉ' < edge) = 1 − level`` for ``ĉ' ~ N(U, s(U)²)``:
+    ``Φ((ĉ − U)/s(U)) = (1 − level)·Φ((edge − U)/s(U))`` (``inf`` when no finite U satisfies it).
+
+    The mirror image of a truncation below (:func:`_truncated_solve` with ``c → −c``)."""
+    return -_truncated_solve(-c_obs, lambda c: spread(-c), -edge, 1.0 - level)
 
 
 def _truncated_below_limits(c_obs: float, spread, edge: float, level: float) -> tuple[float, float]:
     """The two-sided limits ``(L, U)`` at ``level`` for ``ĉ' ~ N(c, s(c)²)`` truncated below at ``edge``
-    (the selection keeps the term exactly when ``ĉ' > edge``; ``-inf``: no truncation).
-
-    With ``S(c) = P_c(ĉ' ≥ ĉ | ĉ' > edge) = Φ((c − ĉ)/s(c)) / Φ((c − edge)/s(c))``, increasing in
-    ``c``, ``L`` solves ``S(L) = (1 − level)/2`` and ``U`` solves ``S(U) = (1 + level)/2``; either is
-    ``∓inf`` when no finite value does.
-    """
-    from scipy.optimize import brentq  # imported here: keeps `import sigmatau` light
-    from scipy.special import log_ndtr
-
-    s0 = spread(c_obs)
-
-    def log_s(x: float) -> float:  # x = (c − ĉ)/s(ĉ)
-        c = c_obs + x * s0
-        s = spread(c)
-        trunc = float(log_ndtr((c - edge) / s)) if math.isfinite(edge) else 0.0
-        return float(log_ndtr((c - c_obs) / s)) - trunc
-
-    def solve(prob: float) -> float:
-        target = math.log(prob)
-        lo, hi = -1.0, 1.0
-        while log_s(hi) < target:
-            lo, hi = hi, 2.0 * hi
-            if hi > 1e4:
-                return math.inf
-        while log_s(lo) > target:
-            lo, hi = 2.0 * lo, lo
-            if lo < -1e4:
-                return -math.inf
-        return c_obs + s0 * brentq(lambda x: log_s(x) - target, lo, hi, xtol=1e-6)
-
-    return solve(0.5 - level / 2.0), solve(0.5 + level / 2.0)
+    (the selection keeps the term exactly when ``ĉ' > edge``; ``-inf``: no truncation): ``S(L) =
+    (1 − level)/2`` and ``S(U) = (1 + level)/2`` (:func:`_truncated_solve`); either is ``∓inf`` when
+    no finite value solves it."""
+    return (_truncated_solve(c_obs, spread, edge, 0.5 - level / 2.0),
+            _truncated_solve(c_obs, spread, edge, 0.5 + level / 2.0))
 
 
 def _selection_aware_intervals(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu: np.ndarray, rate: float,
@@ -638,7 +608,8 @@ def _selection_aware_intervals(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu:
         j = design.names.index(t)
         cf, sf = float(fit.full_coef[j]), math.sqrt(max(float(fit.full_cov[j, j]), 0.0))
         spread = _spread_at(fit, design, j)
-        edge = _keep_edge(fit, design, cols, var, nu, taus, j, min_significance) if spread(cf) > 0 else -math.inf
+        edge = (_selection_edge(fit, design, cols, var, nu, taus, j, min_significance, kept_now=True)
+                if spread(cf) > 0 else -math.inf)
         if not math.isfinite(edge):
             out[t] = _Limits(cf - z * sf, cf + z * sf, "wald", edge, cf)
             continue
@@ -647,7 +618,7 @@ def _selection_aware_intervals(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu:
         if not hi > 0:
             trunc, how = -math.inf, "score-at-edge"
             lo, hi = _truncated_below_limits(cf, spread, trunc, conf)
-        out[t] = _Limits(lo, hi, how, edge, _truncated_below_limits(cf, spread, trunc, 0.0)[0])
+        out[t] = _Limits(lo, hi, how, edge, _truncated_solve(cf, spread, trunc, 0.5))
     return out
 
 
@@ -665,7 +636,7 @@ def _selection_aware_bounds(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu: np
     -----
     Post-selection inference by conditioning on the selection event (Lee, Sun, Sun & Taylor 2016;
     Fithian, Sun & Taylor 2014): with ``ĉ`` the unconstrained estimate and ``u`` the part of the
-    data independent of it (:func:`_drop_edge`), the selection drops the term exactly when
+    data independent of it (:func:`_selection_edge`), the selection drops the term exactly when
     ``ĉ < t*(u)``, so given the drop and ``u``, ``ĉ`` is a normal truncated above at ``t*``. The
     bound ``U`` solves ``Φ((ĉ − U)/s(U)) = ((1 − conf)/2)·Φ((t* − U)/s(U))``: for every ``u`` the
     probability that ``c ≤ U`` given the drop is ``(1 + conf)/2``, hence also given the drop alone.
@@ -686,7 +657,7 @@ def _selection_aware_bounds(fit: _Fit, taus: np.ndarray, var: np.ndarray, nu: np
         if not spread(float(fit.full_coef[j])) > 0:
             out[t] = math.inf
             continue
-        edge = _drop_edge(fit, design, cols, var, nu, taus, j, min_significance)
+        edge = _selection_edge(fit, design, cols, var, nu, taus, j, min_significance, kept_now=False)
         bound = _truncated_upper(float(fit.full_coef[j]), spread, edge, 0.5 + conf / 2.0)
         if bound <= 0:
             # An estimate so far below zero that the limit is not positive (1–3 % of the dropped

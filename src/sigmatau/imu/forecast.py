@@ -22,7 +22,8 @@ import numpy as np
 from ..core.taus import STOP_RATIOS
 from ..uncertainty.confidence import edf_array
 from .extraction import _usable_points
-from .fitting import _columns, _fit_free, _fit_once, _free_fit_of_every_term, _truncated_below_limits
+from .fitting import (_columns, _fit_free, _fit_once, _free_fit_of_every_term, _truncated_below_limits,
+                      _truncated_solve)
 from .noisemodel import NoiseModel
 from .units import TERMS
 
@@ -276,6 +277,6 @@ def _h_printed(j: int, z_p: float, s: float) -> float:
     lo, hi = _truncated_below_limits(c_hat, lambda c: s, edge, level)
     if not (hi > 0 and math.isfinite(hi)):
         return _h(z_p * s)  # analyze then prints the limits not conditioned on the selection
-    mid = _truncated_below_limits(c_hat, lambda c: s, edge, 0.0)[0]
+    mid = _truncated_solve(c_hat, lambda c: s, edge, 0.5)
     value = math.sqrt(mid) if mid > 0 else min(math.sqrt(c_hat), math.sqrt(hi))
     return (math.sqrt(hi) - math.sqrt(max(lo, 0.0))) / (2.0 * value)
