@@ -382,7 +382,6 @@ def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str]
     for t in terms:
         j = TERMS.index(t)
         unit = su.term_unit(t)
-        cf, sf = float(fit.full_coef[j]), math.sqrt(max(float(fit.full_cov[j, j]), 0.0))
         if t in fit.kept:
             out[t] = _kept_parameter(fit, t, conf, su, kept_limits[t])
         elif t == "Q" and fit.filter_time > 0:
@@ -391,6 +390,7 @@ def _fit_parameters(fit: _Fit, conf: float, su: SensorUnit, terms: Sequence[str]
                 note=(f"masked: the 1/τ² term is negative (a low-pass filter, τ_f = {fit.filter_time:.3g} s),"
                       " which hides any quantisation"))
         else:
+            cf, sf = float(fit.full_coef[j]), math.sqrt(max(float(fit.full_cov[j, j]), 0.0))
             c_bound = dropped.get(t, math.inf)
             bound = math.sqrt(max(c_bound, 0.0))
             cap = caps.get(t, math.inf)
