@@ -19,7 +19,8 @@ EDF rules by statistic (numerics.md §2):
 All EDFs take ``N``, the number of **phase** points (frequency samples + 1).
 
 The rules live in sibling modules: :mod:`.greenhall` (Greenhall–Riley) and
-:mod:`.empirical_edf` (SP1065, Howe et al., Theo1); this module dispatches
+:mod:`.empirical_edf` (SP1065, Howe et al., Theo1), and the exact EDF of a white PM + white FM
+mixture in :mod:`.mixture_edf`; this module dispatches
 between them (:func:`edf`, :func:`edf_array`) and holds the intervals. Every
 name stays importable from here.
 """
@@ -40,6 +41,7 @@ from .empirical_edf import _EMPIRICAL_ALPHAS, _empirical_edf, edf_oadev_simple
 # _sw and _sx are imported from here by tests/test_confidence.py.
 from .greenhall import _sw, _sx  # noqa: F401
 from .greenhall import _GREENHALL_STATS, _greenhall_inverse, greenhall_edf
+from .mixture_edf import white_mixture_edf
 from .pdev_edf import PDEV_ALPHAS, pdev_edf_scalar
 
 __all__ = [
@@ -51,6 +53,7 @@ __all__ = [
     "edf_array",
     "edf_reason",
     "edf_oadev_simple",
+    "white_mixture_edf",
     "simple_error",
     "chi2_interval",
     "deviation_interval",
