@@ -103,6 +103,12 @@ and 127/128 (was 104/132, 82/128). Bounds are wider: median 2.1×
 the truth for a dropped K (1.1× before), 3.6× for R (1.4×). Open: read-off
 bounds hold in 97–100 % (a bound on the whole curve), the B read-off with K
 and R covers 58.5 %, kept K/R and N intervals are conservative (up to 86 %).
+Since then: kept K and R intervals conditional on the selection (72.7/76.8/73.7 %
+and 64.1/61.1 % on seeds 60 000 … 60 199, see ``test_grid_coverage``), and, where
+Q and N hold the variance, the exact EDF of the white PM + white FM mixture
+(:func:`sigmatau.confidence.white_mixture_edf`): N's intervals cover in
+73.0–75.5 % (67.0–70.0 % on seeds 61 000 … 61 199), with Q in 75.5 and 67.5 %
+(82.5 and 77.0 % with the dominant noise's EDF).
 
 Real data (tests/test_imu_real.py): the ADIS16405 recording gives gyro
 N = 0.0404/0.0426/0.0414 °/s/√Hz (2.43/2.55/2.48 °/√h; the datasheet figure
