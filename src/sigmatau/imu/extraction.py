@@ -530,10 +530,10 @@ def _white_edf(result: StabilityResult, good: np.ndarray, nu: np.ndarray, coef: 
     all; their contributions are only partly correlated, so the point scatters less
     (:func:`sigmatau.confidence.white_mixture_edf`, exact for white PM + white FM; the
     exact EDF of white FM alone is also 15 % below to 10 % above Greenhall–Riley's at m ≤ 8). With Q
-    in the model the σ of N came out 1.23–1.35× its scatter, and its interval covered in 77.5–82.5 %
-    of 200 records (68.3 % nominal; two sets of seeds). The other terms' share ``1 − W`` (at most a tenth) keeps the point's previous
-    EDF ν and is added as fully correlated with the white part, an upper bound on its scatter:
-    ``2/ν' = (W·√(2/ν_W) + (1 − W)·√(2/ν))²``.
+    in the model the σ of N came out 1.23–1.35× its scatter, and its interval covered in
+    77.5–82.5 % of 200 records (68.3 % nominal; two sets of seeds). The other terms' share
+    ``1 − W`` (at most a tenth) keeps the point's previous EDF ν and is added as fully correlated
+    with the white part, an upper bound on its scatter: ``2/ν' = (W·√(2/ν_W) + (1 − W)·√(2/ν))²``.
     """
     if result.statistic not in ("oadev", "adev") or not np.any(good):
         return nu
@@ -547,11 +547,11 @@ def _white_edf(result: StabilityResult, good: np.ndarray, nu: np.ndarray, coef: 
         return nu
     m = np.asarray(result.m, np.int64)[good][use]
     # With gaps, each τ's EDF is that of the contiguous record giving its number of terms.
-    points = (np.full(m.size, int(result.n_points)) if result.n_effective is None
-              else np.asarray(result.n_effective, np.int64)[good][use])
+    points = (np.full(m.size, float(result.n_points)) if result.n_effective is None
+              else np.asarray(result.n_effective, float)[good][use])
     pm = parts[use, 0] / white[use]
     nu_w = np.array([float(white_mixture_edf(result.statistic, int(mi), int(ni), float(wi)))
-                     if ni >= 2 else math.nan for mi, ni, wi in zip(m, points, pm)])
+                     if math.isfinite(ni) and ni >= 2 else math.nan for mi, ni, wi in zip(m, points, pm)])
     w = share[use]
     rel = w * np.sqrt(2.0 / nu_w) + (1.0 - w) * np.sqrt(2.0 / nu[use])
     out = nu.copy()
