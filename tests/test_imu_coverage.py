@@ -217,10 +217,10 @@ def test_kept_k_interval_covers_given_the_keep(rng):
 
     Measured on these draws: 120 of 175 kept runs covered (68.6 %), value/truth 0.961 at the
     median (120 of 173 and 1.025 with the dominant noise's EDF at every τ, before the white
-    mixture EDF moved the draws' N-dominated points). Before the selection-aware intervals (ĉ ± zσ_c of the unconstrained fit, widened to
-    hold the selected model's value): 137 of 173 (79.2 %), and the value (the selected model's)
-    1.277× the truth at the median, which fails the test: K is kept exactly when it came out
-    high."""
+    mixture EDF moved the draws' N-dominated points). Before the selection-aware intervals
+    (ĉ ± zσ_c of the unconstrained fit, widened to hold the selected model's value): 137 of
+    173 (79.2 %), and the value (the selected model's) 1.277× the truth at the median, which
+    fails the test: K is kept exactly when it came out high."""
     truth = GRID["N+B+K+R"]
     held, ratio = [], []
     for curve in _copula_curves(truth, rng, 300):
