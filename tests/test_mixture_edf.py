@@ -138,6 +138,8 @@ def test_monte_carlo(statistic, w, rng):
     (dict(statistic="oadev", m=0, N=100, pm_share=0.5), "at least 1"),
     (dict(statistic="oadev", m=1.5, N=100, pm_share=0.5), "whole"),
     (dict(statistic="oadev", m=float("nan"), N=100, pm_share=0.5), "whole"),
+    (dict(statistic="oadev", m=1e30, N=100, pm_share=0.5), "whole"),
+    (dict(statistic="oadev", m=10**30, N=100, pm_share=0.5), "whole"),
     (dict(statistic="oadev", m=1, N=100, pm_share=1.5), "0 … 1"),
     (dict(statistic="oadev", m=1, N=100, pm_share=float("nan")), "0 … 1"),
     (dict(statistic="oadev", m=1, N=1, pm_share=0.5), "phase points"),

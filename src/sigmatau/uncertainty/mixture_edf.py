@@ -36,7 +36,7 @@ def white_mixture_edf(statistic: str, m: ArrayLike, N: int, pm_share: ArrayLike)
     of the expected variance and white FM the rest.
 
     ``ν = M²R(0)² / Σ_{|i|<M} (M − |i|) R(iL)²`` with ``R = w·R_P·m²/3 + (1 − w)·R_F·m`` the
-    autocovariance of the frequency differences (module docstring). At ``w = 0`` and ``w = 1`` it is
+    autocovariance of the frequency differences (*Notes*). At ``w = 0`` and ``w = 1`` it is
     the exact EDF of white FM and of white PM alone; in between it is larger than if the two
     contributions were fully correlated, ``2/(w√(2/ν_P) + (1 − w)√(2/ν_F))²``.
 
@@ -90,8 +90,8 @@ def white_mixture_edf(statistic: str, m: ArrayLike, N: int, pm_share: ArrayLike)
     stat = _check(statistic)
     mm = np.asarray(m)
     if mm.size and not (np.issubdtype(mm.dtype, np.number) and np.all(np.isfinite(mm))
-                        and np.all(mm >= 1) and np.all(mm == np.round(mm))):
-        raise ParameterError("m must hold whole averaging factors of at least 1")
+                        and np.all(mm >= 1) and np.all(mm <= 2**62) and np.all(mm == np.round(mm))):
+        raise ParameterError("m must hold whole averaging factors of at least 1 (and below 2**62)")
     w = np.asarray(pm_share, dtype=float)
     if w.size and not np.all((w >= 0) & (w <= 1)):
         raise ParameterError("pm_share must lie in 0 … 1")
