@@ -535,7 +535,7 @@ def _white_edf(result: StabilityResult, good: np.ndarray, nu: np.ndarray, coef: 
     ``1 − W`` (at most a tenth) keeps the point's previous EDF ν and is added as fully correlated
     with the white part, an upper bound on its scatter: ``2/ν' = (W·√(2/ν_W) + (1 − W)·√(2/ν))²``.
     """
-    if result.statistic not in ("oadev", "adev") or not np.any(good):
+    if not np.any(good):  # the curve is an OADEV or ADEV one (_check_result, _curve_of_samples)
         return nu
     taus = np.asarray(result.taus, float)[good]
     parts = _design(taus, rate_f) * np.maximum(np.asarray(coef, float)[:5], 0.0)
